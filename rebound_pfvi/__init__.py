@@ -1,0 +1,70 @@
+"""rebound_pfvi: a phase-fitted discrete Lagrangian integrator for REBOUND.
+
+Importing this package registers the integrator "pfvi" with REBOUND::
+
+    import rebound
+    import rebound_pfvi
+
+    sim = rebound.Simulation()
+    sim.add(m=1.)
+    sim.add(a=1., e=0.5)
+    sim.integrator = "pfvi"
+    sim.dt = 1e-3
+    sim.integrate(10.)
+
+Options are integrator fields (``sim.integrator.fitting``, ``.frequency``,
+``.omega``, ``.stages``, ``.u_max``), documented in ``sim.integrator.__doc__``
+and saved in Simulationarchives; import rebound_pfvi before loading an archive
+that uses it. The method: Kosmas & Vlachos, "Phase-fitted Discrete Lagrangian
+Integrators"; docs/method.md.
+"""
+import ctypes as _ctypes
+
+from ._core import INTEGRATOR_NAME, lib as _lib
+
+__version__ = "0.1.0"
+__all__ = ["INTEGRATOR_NAME", "FITTINGS", "FREQUENCIES", "seed_coefficients", "gamma",
+           "two_point_coefficients"]
+
+#: Values of the ``fitting`` field, in the order of the C enum.
+FITTINGS = ("phase", "phase-literal", "none")
+#: Values of the ``frequency`` field, in the order of the C enum.
+FREQUENCIES = ("curvature", "fixed")
+
+
+def seed_coefficients(u, c):
+    """The seed's fitted interpolation coefficients (b, bbar, B, Bbar) at node c.
+
+    ``q^j = b q_k + bbar q_k+1`` and ``h qdot^j = B q_k + Bbar q_k+1`` with
+    u = omega h (seed section 3). At u = 0 they are the linear limits.
+    """
+    out = (_ctypes.c_double * 4)()
+    _lib.pfvi_seed_coefficients(float(u), float(c), out)
+    return tuple(out)
+
+
+def gamma(u):
+    """gamma(u) = u cot(u): the factor by which the printed two-point Ld scales
+    the exact discrete Lagrangian of the oscillator, and its momenta."""
+    return _lib.pfvi_gamma(float(u))
+
+
+def two_point_coefficients(omega, h, u_max=1.0, fitting="phase"):
+    """Coefficients of one two-point step, as used by the C core.
+
+    Returns a dict with omega (after limiting), cos_u_m1, h_sinc_u,
+    omega_sin_u, half_kick, gamma and ``limited``. Raises ValueError naming
+    the argument for an unknown fitting, and when u lies at a pole.
+    """
+    if fitting not in FITTINGS:
+        raise ValueError(f"fitting={fitting!r} is not valid; allowed: {', '.join(FITTINGS)}")
+    omega = 0.0 if fitting == "none" else float(omega)
+    out = (_ctypes.c_double * 6)()
+    status = _lib.pfvi_two_point_coefficients(omega, float(h), float(u_max),
+                                              int(fitting == "phase-literal"), out)
+    if status < 0:
+        raise ValueError(f"omega*h = {omega * h!r} lies at a pole of the two-point coefficients")
+    keys = ("omega", "cos_u_m1", "h_sinc_u", "omega_sin_u", "half_kick", "gamma")
+    result = dict(zip(keys, out))
+    result["limited"] = bool(status == 1)
+    return result

@@ -1,0 +1,45 @@
+"""Builds the C core of rebound_pfvi against the installed rebound.
+
+The core is a plain shared library loaded with ctypes (as REBOUND and
+REBOUNDx do). It links to librebound by file name only and finds it at run
+time through RUNPATH $ORIGIN/.., the site-packages folder holding both, so
+the installed package carries no path into the build environment.
+"""
+import os
+import sysconfig
+
+from setuptools import Extension, setup
+from setuptools.command.build_ext import build_ext
+
+
+class BuildAgainstRebound(build_ext):
+    def build_extensions(self):
+        import rebound  # the build requirement, pinned in pyproject.toml
+
+        site = os.path.dirname(os.path.dirname(os.path.abspath(rebound.__file__)))
+        include = os.path.join(site, "src")
+        librebound = "librebound" + sysconfig.get_config_var("EXT_SUFFIX")
+        if not os.path.exists(os.path.join(include, "rebound.h")):
+            raise RuntimeError(f"rebound {rebound.__version__} at {site} ships no src/rebound.h")
+        for ext in self.extensions:
+            ext.include_dirs.append(include)
+            ext.define_macros.append(("PFVI_REBOUND_VERSION", '"%s"' % rebound.__version__))
+            ext.library_dirs.append(site)
+            ext.extra_link_args += ["-l:" + librebound, "-Wl,--enable-new-dtags,-rpath,$ORIGIN/.."]
+        # The interpreter's own LDSHARED may carry absolute rpaths (pyenv does):
+        # the core's only search path is $ORIGIN/..
+        self.compiler.linker_so = [arg for arg in self.compiler.linker_so
+                                   if not arg.startswith("-Wl,-rpath")]
+        super().build_extensions()
+
+
+core = Extension(
+    "rebound_pfvi._pfvi_core",
+    sources=[os.path.join("rebound_pfvi", "csrc", f) for f in
+             ("pfvi_integrator.c", "pfvi_fitting.c", "pfvi_frequency.c")],
+    libraries=["m"],
+    extra_compile_args=["-std=c99", "-O3", "-fvisibility=hidden", "-Wall", "-Wextra",
+                        "-D_GNU_SOURCE", "-fno-math-errno"],
+)
+
+setup(ext_modules=[core], cmdclass={"build_ext": BuildAgainstRebound})
