@@ -52,7 +52,7 @@ def gamma(u):
 def two_point_coefficients(omega, h, u_max=1.0, fitting="phase"):
     """Coefficients of one two-point step, as used by the C core.
 
-    Returns a dict with omega (after limiting), cos_u_m1, h_sinc_u,
+    Returns a dict with omega (after limiting), cos_u, h_sinc_u,
     omega_sin_u, half_kick, gamma and ``limited``. Raises ValueError naming
     the argument for an unknown fitting, and when u lies at a pole.
     """
@@ -64,7 +64,7 @@ def two_point_coefficients(omega, h, u_max=1.0, fitting="phase"):
                                               int(fitting == "phase-literal"), out)
     if status < 0:
         raise ValueError(f"omega*h = {omega * h!r} lies at a pole of the two-point coefficients")
-    keys = ("omega", "cos_u_m1", "h_sinc_u", "omega_sin_u", "half_kick", "gamma")
+    keys = ("omega", "cos_u", "h_sinc_u", "omega_sin_u", "half_kick", "gamma")
     result = dict(zip(keys, out))
     result["limited"] = bool(status == 1)
     return result

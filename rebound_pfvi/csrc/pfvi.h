@@ -45,7 +45,8 @@ enum pfvi_frequency {
 // kick again (docs/method.md derives it from the seed's b, bbar, B, Bbar).
 struct pfvi_two_point {
     double omega;        // fitted frequency after limiting
-    double cos_u_m1;     // cos(u) - 1, computed without cancellation
+    double keep;         // 1 if cos u > 0, else cos u: q1 = keep q + ((cos u - keep) q + ...)
+    double cos_u_m_keep; // cos(u) - keep, computed without cancellation
     double h_sinc_u;     // h sin(u)/u  (= sin(u)/omega)
     double omega_sin_u;  // omega sin(u)
     double half_kick;    // (h/2) tan(u)/u: weight of the residual force a + omega^2 q
@@ -58,6 +59,11 @@ struct pfvi_end_state {
     double xv[6];
     double m;
     double a[3];
+};
+
+struct pfvi_compensation {
+    double x[3];
+    double v[3];
 };
 
 // Integrator state. Options and statistics are REBOUND fields (saved in
@@ -81,6 +87,13 @@ struct pfvi_state {
     struct pfvi_end_state* end;    // end of the last step, with its accelerations (force reuse)
     struct pfvi_two_point* fit;    // per-particle coefficients of the current step
     struct reb_vec3d* v_rotated;   // velocities before the final kick (velocity-dependent forces)
+    struct reb_vec3d* dx;          // position increment of the step, with the carried low-order part
+    struct reb_vec3d* dv;          // velocity increment of the step, with the carried low-order part
+    // Compensated summation: the low-order parts of x, y, z, vx, vy, vz that
+    // the particles' doubles lost (Kahan). Saved in Simulationarchives, so a
+    // continued run stays bit-identical.
+    struct pfvi_compensation* compensation;
+    size_t N_compensation;
     size_t cache_N;                // >0: `end` describes the particles, taken at cache_t with cache_G
     double cache_t;
     double cache_G;

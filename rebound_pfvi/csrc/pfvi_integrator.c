@@ -81,6 +81,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "coefficients have a pole at u = pi/2 (and, for 'phase-literal', at pi): a step whose "
         "u lies within 1e-3 of one is refused. Default 1.0, where tan(u)/u = 1.56.",
         REB_DOUBLE, u_max),
+    { "", REB_POINTER, "compensation", offsetof(struct pfvi_state, compensation),
+        offsetof(struct pfvi_state, N_compensation), sizeof(struct pfvi_compensation), 0 },
     PFVI_FIELD("Statistic: steps taken by this integrator.", REB_UINT64, n_steps),
     PFVI_FIELD("Statistic: particle-steps in which u = omega*dt exceeded u_max and was limited.",
         REB_UINT64, n_u_limited),
@@ -115,6 +117,9 @@ static void pfvi_free(void* state){
     free(s->end);
     free(s->fit);
     free(s->v_rotated);
+    free(s->dx);
+    free(s->dv);
+    free(s->compensation);
     free(s);
 }
 
@@ -169,6 +174,18 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_state*
 
 // Scratch buffers grow only when N does; the hot path allocates nothing.
 static int pfvi_ensure_scratch(struct reb_simulation* r, struct pfvi_state* s, size_t N){
+    if (s->N_compensation != N){
+        // New or removed particles: the low-order parts no longer belong to
+        // anyone. (A particle edited in place keeps its few ulps: harmless.)
+        struct pfvi_compensation* comp = realloc(s->compensation, N*sizeof(struct pfvi_compensation));
+        if (!comp){
+            pfvi_error(r, "pfvi: could not allocate scratch memory for %zu particles.", N);
+            return 0;
+        }
+        memset(comp, 0, N*sizeof(struct pfvi_compensation));
+        s->compensation = comp;
+        s->N_compensation = N;
+    }
     if (N <= s->N_allocated){
         return 1;
     }
@@ -181,7 +198,11 @@ static int pfvi_ensure_scratch(struct reb_simulation* r, struct pfvi_state* s, s
     if (fit) s->fit = fit;
     struct reb_vec3d* v_rotated = realloc(s->v_rotated, N*sizeof(struct reb_vec3d));
     if (v_rotated) s->v_rotated = v_rotated;
-    if (!start || !end || !fit || !v_rotated){
+    struct reb_vec3d* dx = realloc(s->dx, N*sizeof(struct reb_vec3d));
+    if (dx) s->dx = dx;
+    struct reb_vec3d* dv = realloc(s->dv, N*sizeof(struct reb_vec3d));
+    if (dv) s->dv = dv;
+    if (!start || !end || !fit || !v_rotated || !dx || !dv){
         pfvi_error(r, "pfvi: could not allocate scratch memory for %zu particles.", N);
         return 0;
     }
@@ -354,24 +375,48 @@ static void pfvi_step(struct reb_simulation* r, void* state){
         omega_max = fmax(omega_max, s->fit[i].omega);
     }
 
-    // Kick with the residual force, then rotate with the harmonic flow.
+    // Kick with the residual force, then rotate with the harmonic flow. With
+    // cos u > 0 (always at the default u_max) the whole step is an increment
+    // of x and v, added with compensated summation; "phase-literal" and
+    // cos u < 0 use plain products and drop the carried low-order parts.
     for (size_t i=0; i<N; i++){
         const struct reb_particle* const q = &p0[i];
         const double* const a = e[i].a;
         const struct pfvi_two_point* const f = &s->fit[i];
+        const struct pfvi_compensation* const comp = &s->compensation[i];
         const double w2 = f->omega*f->omega;
-        const double g = literal ? f->gamma : 1.;
-        const double vx = q->vx/g + f->half_kick*(a[0] + w2*q->x);
-        const double vy = q->vy/g + f->half_kick*(a[1] + w2*q->y);
-        const double vz = q->vz/g + f->half_kick*(a[2] + w2*q->z);
-        // Increments first, then one addition: round-off relative to the step, as in Verlet.
-        ps[i].x = q->x + (f->cos_u_m1*q->x + f->h_sinc_u*vx);
-        ps[i].y = q->y + (f->cos_u_m1*q->y + f->h_sinc_u*vy);
-        ps[i].z = q->z + (f->cos_u_m1*q->z + f->h_sinc_u*vz);
-        ps[i].vx = vx + (f->cos_u_m1*vx - f->omega_sin_u*q->x);
-        ps[i].vy = vy + (f->cos_u_m1*vy - f->omega_sin_u*q->y);
-        ps[i].vz = vz + (f->cos_u_m1*vz - f->omega_sin_u*q->z);
+        const double kick_x = f->half_kick*(a[0] + w2*q->x);
+        const double kick_y = f->half_kick*(a[1] + w2*q->y);
+        const double kick_z = f->half_kick*(a[2] + w2*q->z);
+        const double k = f->keep, rc = f->cos_u_m_keep;
+        if (!literal && k == 1.){
+            const double vx = q->vx + kick_x, vy = q->vy + kick_y, vz = q->vz + kick_z;
+            s->dx[i] = (struct reb_vec3d){
+                (rc*q->x + f->h_sinc_u*vx) + comp->x[0],
+                (rc*q->y + f->h_sinc_u*vy) + comp->x[1],
+                (rc*q->z + f->h_sinc_u*vz) + comp->x[2]};
+            s->dv[i] = (struct reb_vec3d){
+                kick_x + (rc*vx - f->omega_sin_u*q->x) + comp->v[0],
+                kick_y + (rc*vy - f->omega_sin_u*q->y) + comp->v[1],
+                kick_z + (rc*vz - f->omega_sin_u*q->z) + comp->v[2]};
+            ps[i].x = q->x + s->dx[i].x;
+            ps[i].y = q->y + s->dx[i].y;
+            ps[i].z = q->z + s->dx[i].z;
+            ps[i].vx = q->vx + s->dv[i].x;
+            ps[i].vy = q->vy + s->dv[i].y;
+            ps[i].vz = q->vz + s->dv[i].z;
+        }else{
+            const double g = literal ? f->gamma : 1.;
+            const double vx = q->vx/g + kick_x, vy = q->vy/g + kick_y, vz = q->vz/g + kick_z;
+            ps[i].x = k*q->x + (rc*q->x + f->h_sinc_u*vx);
+            ps[i].y = k*q->y + (rc*q->y + f->h_sinc_u*vy);
+            ps[i].z = k*q->z + (rc*q->z + f->h_sinc_u*vz);
+            ps[i].vx = k*vx + (rc*vx - f->omega_sin_u*q->x);
+            ps[i].vy = k*vy + (rc*vy - f->omega_sin_u*q->y);
+            ps[i].vz = k*vz + (rc*vz - f->omega_sin_u*q->z);
+        }
     }
+    const int compensated = !literal;
 
     r->t = t0 + h;
     if (!pfvi_update_acceleration(r, s, N, t0)){
@@ -385,19 +430,25 @@ static void pfvi_step(struct reb_simulation* r, void* state){
         if (!pfvi_final_kick_velocity_dependent(r, s, N, t0)){
             return;
         }
-    }else{
-        for (size_t i=0; i<N; i++){
-            const struct pfvi_two_point* const f = &s->fit[i];
-            const double w2 = f->omega*f->omega;
-            ps[i].vx += f->half_kick*(ps[i].ax + w2*ps[i].x);
-            ps[i].vy += f->half_kick*(ps[i].ay + w2*ps[i].y);
-            ps[i].vz += f->half_kick*(ps[i].az + w2*ps[i].z);
-        }
     }
-    if (literal){
-        for (size_t i=0; i<N; i++){
-            const double g = s->fit[i].gamma;
-            ps[i].vx *= g; ps[i].vy *= g; ps[i].vz *= g;
+    for (size_t i=0; i<N; i++){
+        const struct pfvi_two_point* const f = &s->fit[i];
+        const double w2 = f->omega*f->omega;
+        const double kick_x = f->half_kick*(ps[i].ax + w2*ps[i].x);
+        const double kick_y = f->half_kick*(ps[i].ay + w2*ps[i].y);
+        const double kick_z = f->half_kick*(ps[i].az + w2*ps[i].z);
+        if (compensated && f->keep == 1.){
+            s->dv[i].x += kick_x; s->dv[i].y += kick_y; s->dv[i].z += kick_z;
+            ps[i].vx = p0[i].vx + s->dv[i].x;
+            ps[i].vy = p0[i].vy + s->dv[i].y;
+            ps[i].vz = p0[i].vz + s->dv[i].z;
+        }else{
+            const struct reb_vec3d vr = r->force_is_velocity_dependent ? s->v_rotated[i]
+                : (struct reb_vec3d){ps[i].vx, ps[i].vy, ps[i].vz};
+            const double g = literal ? f->gamma : 1.;
+            ps[i].vx = g*(vr.x + kick_x);
+            ps[i].vy = g*(vr.y + kick_y);
+            ps[i].vz = g*(vr.z + kick_z);
         }
     }
     for (size_t i=0; i<N; i++){
@@ -408,6 +459,20 @@ static void pfvi_step(struct reb_simulation* r, void* state){
         }
     }
 
+    // The step is taken: keep what the sums of x and v lost.
+    for (size_t i=0; i<N; i++){
+        struct pfvi_compensation* const comp = &s->compensation[i];
+        if (compensated && s->fit[i].keep == 1.){
+            comp->x[0] = s->dx[i].x - (ps[i].x - p0[i].x);
+            comp->x[1] = s->dx[i].y - (ps[i].y - p0[i].y);
+            comp->x[2] = s->dx[i].z - (ps[i].z - p0[i].z);
+            comp->v[0] = s->dv[i].x - (ps[i].vx - p0[i].vx);
+            comp->v[1] = s->dv[i].y - (ps[i].vy - p0[i].vy);
+            comp->v[2] = s->dv[i].z - (ps[i].vz - p0[i].vz);
+        }else{
+            *comp = (struct pfvi_compensation){{0., 0., 0.}, {0., 0., 0.}};
+        }
+    }
     r->dt_last_done = h;
     s->n_steps++;
     s->n_u_limited += n_limited;
