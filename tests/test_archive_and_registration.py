@@ -1,0 +1,155 @@
+"""Simulationarchive round trips, registration once per process, relocatable install."""
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+
+import pytest
+import rebound
+
+import rebound_pfvi
+
+STATE = ("x", "y", "z", "vx", "vy", "vz")
+
+
+def setup_sim():
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=0.6)
+    sim.add(m=0.0, a=1.7, e=0.2, inc=0.1)
+    sim.move_to_com()
+    sim.integrator = "pfvi"
+    sim.integrator.fitting = "phase"
+    sim.integrator.u_max = 0.8
+    sim.dt = 0.013
+    return sim
+
+
+def run_python(code, timeout=120):
+    return subprocess.run([sys.executable, "-P", "-c", textwrap.dedent(code)], capture_output=True,
+                          text=True, timeout=timeout)
+
+
+def test_archive_round_trip_in_a_fresh_process_is_bit_identical(tmp_path):
+    archive = tmp_path / "run.bin"
+    sim = setup_sim()
+    sim.integrate(7.3)
+    sim.save_to_file(str(archive))
+    sim.integrate(20.0)
+    expected = [repr(getattr(p, f)) for p in sim.particles for f in STATE]
+    result = run_python(f"""
+        import rebound, rebound_pfvi
+        sim = rebound.Simulation({str(archive)!r})
+        assert str(sim.integrator) == "pfvi"
+        assert sim.integrator.u_max == 0.8 and sim.integrator.fitting == "phase"
+        sim.integrate(20.0)
+        print(" ".join(repr(getattr(p, f)) for p in sim.particles for f in {STATE!r}))
+        print(sim.t, sim.integrator.n_steps)
+    """)
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.split("\n")
+    assert lines[0].split() == expected
+    assert float(lines[1].split()[0]) == sim.t
+    assert int(lines[1].split()[1]) == sim.integrator.n_steps
+
+
+@pytest.mark.parametrize("fitting", ["phase", "phase-literal", "none"])
+def test_fields_survive_save_and_load(tmp_path, fitting):
+    sim = setup_sim()
+    sim.integrator.fitting = fitting
+    sim.integrator.frequency = "fixed"
+    sim.integrator.omega = 0.25
+    sim.integrate(1.0)
+    path = str(tmp_path / "a.bin")
+    sim.save_to_file(path)
+    loaded = rebound.Simulation(path)
+    assert str(loaded.integrator) == "pfvi"
+    for field in ("fitting", "frequency", "omega", "stages", "u_max", "n_steps",
+                  "n_u_limited", "n_force_evaluations", "omega_min", "omega_max"):
+        assert getattr(loaded.integrator, field) == getattr(sim.integrator, field), field
+
+
+def test_registered_once_even_after_reimport_and_reload():
+    # REBOUND 5.2.2 hangs on a second custom registration: a timeout here is the bug.
+    result = run_python("""
+        import ctypes, importlib, rebound
+        import rebound_pfvi
+        importlib.reload(rebound_pfvi._core)
+        importlib.reload(rebound_pfvi)
+        import rebound_pfvi
+        names = rebound.clibrebound.reb_integrators_registered
+        names.restype = ctypes.POINTER(ctypes.c_char_p)
+        lst = names()
+        found = []
+        i = 0
+        while lst[i]:
+            found.append(lst[i].decode()); i += 1
+        print(found.count("pfvi"))
+        sim = rebound.Simulation(); sim.add(m=1.); sim.add(a=1.)
+        sim.integrator = "pfvi"; sim.integrate(1.)
+        print(sim.integrator)
+    """, timeout=60)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == ["1", "pfvi"]
+
+
+def test_import_is_light():
+    result = run_python("""
+        import sys, rebound_pfvi
+        print(sorted(m for m in ("astropy", "matplotlib", "dask", "scipy") if m in sys.modules))
+    """)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "[]"
+
+
+def test_core_links_relocatably():
+    core = rebound_pfvi._core._path
+    out = subprocess.run(["readelf", "-d", core], capture_output=True, text=True)
+    if out.returncode != 0:
+        pytest.skip("readelf not available")
+    paths = [line.split("[")[1].rstrip("]") for line in out.stdout.splitlines()
+             if "RPATH" in line or "RUNPATH" in line]
+    assert paths == ["$ORIGIN/.."]
+
+
+def test_installed_package_still_imports_after_being_moved(tmp_path):
+    site = os.path.dirname(os.path.dirname(os.path.abspath(rebound.__file__)))
+    moved = tmp_path / "moved"
+    moved.mkdir()
+    shutil.copytree(os.path.dirname(rebound.__file__), moved / "rebound")
+    shutil.copytree(os.path.dirname(rebound_pfvi.__file__), moved / "rebound_pfvi")
+    for name in os.listdir(site):
+        if name.startswith("librebound"):
+            shutil.copy2(os.path.join(site, name), moved / name)
+    result = run_python(f"""
+        import sys
+        sys.path.insert(0, {str(moved)!r})
+        import rebound, rebound_pfvi
+        assert rebound.__file__.startswith({str(moved)!r}), rebound.__file__
+        assert rebound_pfvi.__file__.startswith({str(moved)!r})
+        sim = rebound.Simulation(); sim.add(m=1.); sim.add(a=1.)
+        sim.integrator = "pfvi"; sim.dt = 0.01; sim.integrate(1.)
+        print(sim.integrator.n_steps)
+    """)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "100"
+
+
+def test_abi_check_names_both_versions(monkeypatch):
+    monkeypatch.setattr(rebound, "__version__", "9.9.9")
+    with pytest.raises(ImportError, match=r"compiled against rebound 5\.2\.2 .* but rebound 9\.9\.9"):
+        rebound_pfvi._core._check_abi()
+
+
+def test_documentation_lists_every_field():
+    sim = rebound.Simulation()
+    sim.integrator = "pfvi"
+    doc = " ".join(sim.integrator.__doc__.split())
+    assert "Kosmas & Vlachos, \"Phase-fitted Discrete Lagrangian Integrators\"" in doc
+    for field in ("fitting", "frequency", "omega", "stages", "u_max", "n_steps", "n_u_limited",
+                  "n_force_evaluations", "omega_min", "omega_max"):
+        assert f"{field} :" in doc
+    assert "'phase-literal'" in doc
+    assert (sim.integrator.fitting, sim.integrator.frequency, sim.integrator.stages,
+            sim.integrator.u_max, sim.integrator.omega) == ("phase", "curvature", 2, 1.0, 0.0)

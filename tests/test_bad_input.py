@@ -1,0 +1,146 @@
+"""Bad input: a clear error naming the problem, and nothing lost."""
+import math
+
+import pytest
+import rebound
+
+from conftest import snapshot, two_body
+
+
+def pfvi_sim():
+    sim = two_body(1e-3, e=0.3, com=True)
+    sim.add(m=0.0, a=2.0, e=0.1, primary=sim.particles[0])
+    sim.integrator = "pfvi"
+    sim.dt = 0.01
+    sim.integrate(0.5)  # mid-run, with a force already kept from the last step
+    return sim
+
+
+def assert_refused(sim, match, t_target=1.0, exact_finish_time=1):
+    before = snapshot(sim)
+    with pytest.raises(RuntimeError, match=match):
+        sim.integrate(t_target, exact_finish_time=exact_finish_time)
+    assert snapshot(sim) == before
+
+
+def set_raw(sim, field, value):
+    """Write a raw value the way ctypes code (or a stray int) would, bypassing the enum names."""
+    import ctypes
+    fd = sim.integrator.callbacks.field_descriptor_list.field_descriptor_for_name(field)
+    ctype = {2: ctypes.c_int, 1: ctypes.c_double}[fd.dtype]
+    ctype.from_address(sim.integrator.state + fd.offset).value = value
+
+
+@pytest.mark.parametrize("field, value, match", [
+    ("fitting", 7, r"integrator\.fitting = 7 is not valid; allowed: 'phase', 'phase-literal', 'none'"),
+    ("fitting", -1, r"integrator\.fitting = -1"),
+    ("frequency", 2, r"integrator\.frequency = 2 is not valid; allowed: 'curvature', 'fixed'"),
+    ("stages", 3, r"integrator\.stages = 3 is not supported; allowed: 2"),
+    ("stages", -2, r"integrator\.stages = -2"),
+    ("u_max", 0.0, r"integrator\.u_max = 0 is not valid"),
+    ("u_max", 3.2, r"integrator\.u_max = 3\.2 is not valid"),
+    ("u_max", math.nan, r"integrator\.u_max = nan"),
+])
+def test_invalid_field_values(field, value, match):
+    sim = pfvi_sim()
+    set_raw(sim, field, value)
+    assert_refused(sim, match)
+
+
+@pytest.mark.parametrize("omega", [-1.0, math.nan, math.inf])
+def test_invalid_omega_with_fixed_frequency(omega):
+    sim = pfvi_sim()
+    sim.integrator.frequency = "fixed"
+    sim.integrator.omega = omega
+    assert_refused(sim, r"integrator\.omega = .* with frequency 'fixed'")
+
+
+def test_negative_omega_is_ignored_with_curvature_frequency():
+    sim = pfvi_sim()
+    sim.integrator.omega = -1.0
+    sim.integrate(0.6)
+    assert sim.t == 0.6
+
+
+def test_unknown_enum_name_names_the_allowed_values():
+    sim = pfvi_sim()
+    with pytest.raises(AttributeError, match="phase, phase-literal, none"):
+        sim.integrator.fitting = "exponential"
+    with pytest.raises(AttributeError, match="curvature, fixed"):
+        sim.integrator.frequency = "osculating"
+
+
+@pytest.mark.parametrize("dt, exact_finish_time", [(0.0, 1), (math.nan, 1), (math.inf, 0), (-math.inf, 0)])
+def test_invalid_time_step(dt, exact_finish_time):
+    sim = pfvi_sim()
+    sim.dt = dt
+    # dt = 0 would otherwise never reach t; pfvi refuses the step instead.
+    assert_refused(sim, r"sim\.dt = .* must be finite and non-zero", exact_finish_time=exact_finish_time)
+
+
+def test_infinite_time_step_is_shortened_by_exact_finish_time():
+    # REBOUND shortens a step that would overshoot to tmax - t before pfvi sees it.
+    sim = pfvi_sim()
+    sim.dt = math.inf
+    sim.integrate(0.6)
+    assert sim.t == 0.6
+
+
+@pytest.mark.parametrize("attribute", ["x", "y", "z", "vx", "vy", "vz", "m"])
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
+def test_non_finite_particle_is_named(attribute, value):
+    sim = pfvi_sim()
+    setattr(sim.particles[1], attribute, value)
+    assert_refused(sim, r"particle 1 has a non-finite position, velocity or mass")
+
+
+def test_non_finite_force_rolls_back():
+    sim = pfvi_sim()
+    calls = {"n": 0}
+
+    def force(simp):
+        calls["n"] += 1
+        if calls["n"] == 2:  # the force at the end of the first step
+            simp.contents.particles[2].ax = math.nan
+
+    sim.additional_forces = force
+    assert_refused(sim, r"force on particle 2 is not finite")
+
+
+def test_pole_of_the_coefficients_is_refused():
+    sim = pfvi_sim()
+    sim.integrator.frequency = "fixed"
+    sim.integrator.u_max = 3.0
+    sim.integrator.omega = (math.pi / 2) / sim.dt
+    assert_refused(sim, r"particle 0: u = omega\*dt = 1\.5708 is within 0\.001 of a pole")
+
+
+def test_variational_particles_are_refused():
+    sim = pfvi_sim()
+    sim.add_variation()
+    assert_refused(sim, r"variational particles \(N_var = 3\) are not supported")
+
+
+def test_a_refused_step_can_be_retried_after_fixing_the_input():
+    sim = pfvi_sim()
+    reference = pfvi_sim()
+    sim.integrator.stages = 3
+    with pytest.raises(RuntimeError):
+        sim.integrate(1.0)
+    sim.integrator.stages = 2
+    sim.integrate(1.0)
+    reference.integrate(1.0)
+    # Bytes differ between two simulations (each particle points to its own),
+    # so compare the physical state.
+    fields = ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az", "m")
+    assert sim.t == reference.t
+    for a, b in zip(sim.particles, reference.particles):
+        assert [getattr(a, f) for f in fields] == [getattr(b, f) for f in fields]
+
+
+def test_no_particles_advances_time():
+    sim = rebound.Simulation()
+    sim.integrator = "pfvi"
+    sim.dt = 0.1
+    sim.steps(3)
+    assert sim.t == pytest.approx(0.3)
