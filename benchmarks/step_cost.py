@@ -1,0 +1,93 @@
+"""ns per step of pfvi beside LEAPFROG, WHFast and IAS15, as ratios from one run.
+
+    python benchmarks/step_cost.py [--repeats 7] [--steps 200000]
+
+Two systems: N = 2 (m = 1 and 1e-3, a = 1, e = 0.5) and a star with 50
+planets (masses 1e-5, a from 1 to 6, small e and inc). Every integrator runs
+the same simulation for the same number of steps (IAS15: its own adaptive
+steps over the same time span, counted with steps_done). Runs are
+interleaved, integrator by integrator, `--repeats` times, and the best time
+is kept: the machines are shared and noisy, so only the ratios in one run
+mean something. Output: a markdown table on stdout.
+"""
+import argparse
+import random
+import time
+
+import rebound
+
+import rebound_pfvi  # noqa: F401
+
+
+def two_body():
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=0.5)
+    sim.move_to_com()
+    return sim, 2e-3
+
+
+def star_and_50_planets():
+    rng = random.Random(1)
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    for k in range(50):
+        sim.add(m=1e-5, a=1.0 + 0.1 * k, e=0.05 * rng.random(), inc=0.02 * rng.random(),
+                f=6.283 * rng.random())
+    sim.move_to_com()
+    return sim, 2e-3
+
+
+SETTINGS = {
+    "pfvi phase": ("pfvi", {"fitting": "phase"}),
+    "pfvi none": ("pfvi", {"fitting": "none"}),
+    "leapfrog": ("leapfrog", {}),
+    "whfast": ("whfast", {}),
+    "ias15": ("ias15", {}),
+}
+
+
+def time_once(make, setting, steps):
+    sim, dt = make()
+    integrator, fields = SETTINGS[setting]
+    sim.integrator = integrator
+    for name, value in fields.items():
+        setattr(sim.integrator, name, value)
+    sim.dt = dt
+    tick = time.perf_counter()
+    sim.integrate(steps * dt, exact_finish_time=0)
+    wall = time.perf_counter() - tick
+    return wall / sim.steps_done * 1e9, sim.steps_done
+
+
+def measure(make, steps, repeats):
+    best = {name: float("inf") for name in SETTINGS}
+    counts = {}
+    for _ in range(repeats):
+        for name in SETTINGS:
+            ns, n = time_once(make, name, steps)
+            best[name] = min(best[name], ns)
+            counts[name] = n
+    return best, counts
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeats", type=int, default=7)
+    parser.add_argument("--steps", type=int, default=200_000, help="steps at N = 2 (N = 51: steps/50)")
+    args = parser.parse_args()
+    print(f"rebound {rebound.__version__}, rebound_pfvi {rebound_pfvi.__version__}, "
+          f"best of {args.repeats} interleaved runs")
+    print()
+    print("| system | integrator | steps | ns/step | ratio to leapfrog |")
+    print("|---|---|---|---|---|")
+    for label, make, steps in (("N = 2", two_body, args.steps),
+                               ("N = 51", star_and_50_planets, max(args.steps // 50, 100))):
+        best, counts = measure(make, steps, args.repeats)
+        for name in SETTINGS:
+            print(f"| {label} | {name} | {counts[name]} | {best[name]:.0f} | "
+                  f"{best[name] / best['leapfrog']:.2f} |")
+
+
+if __name__ == "__main__":
+    main()
