@@ -72,7 +72,7 @@ enum pfvi_fit_status pfvi_two_point_fit(double omega, double h, double u_max, in
     fit->h_sinc_u = h*s;
     fit->omega_sin_u = omega*sin_u;
     fit->half_kick = 0.5*h*(s/cos_u);
-    fit->gamma = cos_u/s;
+    fit->gamma = literal ? cos_u/s : 1.;  // only phase-literal rescales momenta
     return status;
 }
 
@@ -99,7 +99,7 @@ int pfvi_two_point_coefficients(double omega, double h, double u_max, int litera
     const enum pfvi_fit_status status = pfvi_two_point_fit(omega, h, u_max, literal, &fit);
     if (status != PFVI_FIT_POLE){
         out[0] = fit.omega; out[1] = fit.keep + fit.cos_u_m_keep; out[2] = fit.h_sinc_u;
-        out[3] = fit.omega_sin_u; out[4] = fit.half_kick; out[5] = fit.gamma;
+        out[3] = fit.omega_sin_u; out[4] = fit.half_kick; out[5] = pfvi_gamma(fit.omega*h);
     }
     return (int)status;
 }

@@ -371,8 +371,8 @@ static void pfvi_step(struct reb_simulation* r, void* state){
             return;
         }
         n_limited += (status == PFVI_FIT_LIMITED);
-        omega_min = fmin(omega_min, s->fit[i].omega);
-        omega_max = fmax(omega_max, s->fit[i].omega);
+        omega_min = (s->fit[i].omega < omega_min) ? s->fit[i].omega : omega_min;
+        omega_max = (s->fit[i].omega > omega_max) ? s->fit[i].omega : omega_max;
     }
 
     // Kick with the residual force, then rotate with the harmonic flow. With
