@@ -3,7 +3,6 @@ import ctypes
 import math
 from fractions import Fraction
 
-import pytest
 import rebound
 
 import rebound_pfvi  # noqa: F401  (registers "pfvi")
@@ -72,10 +71,3 @@ def two_body(m1, a=1.0, e=0.0, com=True, f=0.0):
 
 def relative_energy_error(sim, E0):
     return abs((sim.energy() - E0) / E0)
-
-
-@pytest.fixture
-def kepler_e05():
-    sim = two_body(1e-3, e=0.5)
-    sim.integrator = "pfvi"
-    return sim
