@@ -50,7 +50,7 @@ struct pfvi_two_point {
     double h_sinc_u;     // h sin(u)/u  (= sin(u)/omega)
     double omega_sin_u;  // omega sin(u)
     double half_kick;    // (h/2) tan(u)/u: weight of the residual force a + omega^2 q
-    double gamma;        // gamma(u) = u cot u, the momentum scale of the literal Ld
+    double gamma;        // phase-literal: gamma(u) = u cot u, its momentum scale; otherwise 1
 };
 
 // What the next step needs of the last one: position and velocity (compared
