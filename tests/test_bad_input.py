@@ -35,7 +35,8 @@ def set_raw(sim, field, value):
     ("fitting", 7, r"integrator\.fitting = 7 is not valid; allowed: 'phase', 'phase-literal', 'none'"),
     ("fitting", -1, r"integrator\.fitting = -1"),
     ("frequency", 2, r"integrator\.frequency = 2 is not valid; allowed: 'curvature', 'fixed'"),
-    ("stages", 3, r"integrator\.stages = 3 is not supported; allowed: 2"),
+    ("stages", 7, r"integrator\.stages = 7 is not supported; allowed: 2 to 6"),
+    ("stages", 1, r"integrator\.stages = 1 is not supported; allowed: 2 to 6"),
     ("stages", -2, r"integrator\.stages = -2"),
     ("u_max", 0.0, r"integrator\.u_max = 0 is not valid"),
     ("u_max", 3.2, r"integrator\.u_max = 3\.2 is not valid"),
@@ -124,7 +125,7 @@ def test_variational_particles_are_refused():
 def test_a_refused_step_can_be_retried_after_fixing_the_input():
     sim = pfvi_sim()
     reference = pfvi_sim()
-    sim.integrator.stages = 3
+    sim.integrator.stages = 9
     with pytest.raises(RuntimeError):
         sim.integrate(1.0)
     sim.integrator.stages = 2

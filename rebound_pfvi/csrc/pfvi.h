@@ -27,6 +27,14 @@
 // Fixed-point iterations allowed for the implicit final kick when the force
 // depends on velocities.
 #define PFVI_VDEP_MAX_ITERATIONS 16
+// Gauss-Lobatto discrete Lagrangians with interior corrections (seed section 6).
+#define PFVI_STAGES_MIN 2
+#define PFVI_STAGES_MAX 6
+// The stage solve: fixed-point iterations per step at most, and the largest
+// relative change of the stage values at which a solve that stops decreasing
+// is accepted as converged to round-off (larger: the step is refused).
+#define PFVI_STAGE_MAX_ITERATIONS 50
+#define PFVI_STAGE_TOLERANCE 1e-12
 
 enum pfvi_fitting {
     PFVI_FITTING_PHASE = 0,          // seed's Ld divided by gamma(u): exact q and p on the oscillator
@@ -53,6 +61,39 @@ struct pfvi_two_point {
     double gamma;        // phase-literal: gamma(u) = u cot u, its momentum scale; otherwise 1
 };
 
+// Gauss-Lobatto quadrature on [0, 1] (seed section 3, maximal order): nodes
+// c^1 = 0 < ... < c^s = 1, weights w_j with sum_j w_j (c^j)^l = 1/(l+1) for
+// l <= 2s - 3, and the differentiation matrix of the interpolating polynomial,
+// a[k][j] = l_j'(c^k), with sum_j a^k_j = 0 and sum_j a^k_j (c^j)^n = n (c^k)^(n-1)
+// (seed section 6). Computed, not tabulated: pfvi_lobatto.c.
+struct pfvi_lobatto {
+    int s;
+    double c[PFVI_STAGES_MAX];
+    double w[PFVI_STAGES_MAX];
+    double a[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
+    double det_classical;   // determinant of the stage matrix at u = 0 (singularity guard)
+};
+
+// One particle's s-stage discrete Lagrangian over one step, u = omega h: the
+// fitted interpolation of the seed (b, bbar, B, Bbar at every node), written
+// with the cancellation-free combinations beta_m = b + bbar - 1 and beta_d =
+// B + Bbar, the momentum normalisation G, and the LU factors of the matrix of
+// the linear (kinetic) part of the equations p_k = -D1 Ld, dLd/d(delta q^j) = 0
+// in the unknowns (q_k+1 - q_k, delta q^2, ..., delta q^s-1).
+struct pfvi_stage_fit {
+    double omega;
+    double G;                         // -D1 Ld_printed = G p_k: gamma_s(u) for "phase", else 1
+    double b[PFVI_STAGES_MAX];
+    double bbar[PFVI_STAGES_MAX];
+    double B[PFVI_STAGES_MAX];
+    double Bbar[PFVI_STAGES_MAX];
+    double beta_m[PFVI_STAGES_MAX];
+    double beta_d[PFVI_STAGES_MAX];
+    double q0_row[PFVI_STAGES_MAX-1]; // coefficient of q_k in each equation
+    double lu[PFVI_STAGES_MAX-1][PFVI_STAGES_MAX-1];
+    int pivot[PFVI_STAGES_MAX-1];
+};
+
 // What the next step needs of the last one: position and velocity (compared
 // bitwise, in the order of struct reb_particle), mass, and the acceleration.
 struct pfvi_end_state {
@@ -77,6 +118,9 @@ struct pfvi_state {
     double u_max;
     // Statistics
     uint64_t n_steps;
+    uint64_t n_iterations;
+    uint64_t iterations_max;
+    double iterations_mean;
     uint64_t n_u_limited;
     uint64_t n_force_evaluations;
     double omega_min;
@@ -94,6 +138,16 @@ struct pfvi_state {
     // continued run stays bit-identical.
     struct pfvi_compensation* compensation;
     size_t N_compensation;
+    // The s-stage solve (stages >= 3): quadrature, per-particle fits, stage
+    // accelerations a[i][k] (also the predictor's data: the last step's), and
+    // the unknowns of the current and the next iterate.
+    struct pfvi_lobatto lobatto;
+    struct pfvi_stage_fit* stage_fit;
+    double (*stage_a)[PFVI_STAGES_MAX][3];
+    double (*unknowns)[PFVI_STAGES_MAX-1][3];
+    double (*unknowns_next)[PFVI_STAGES_MAX-1][3];
+    int predictor_stages;          // s of the step whose stage_a may seed the next solve (0: none)
+    double predictor_h;
     size_t cache_N;                // >0: `end` describes the particles, taken at cache_t with cache_G
     double cache_t;
     double cache_G;
@@ -106,6 +160,23 @@ PFVI_INTERNAL enum pfvi_fit_status pfvi_two_point_fit(double omega, double h, do
 PFVI_API void pfvi_seed_coefficients(double u, double c, double out[4]);
 PFVI_API double pfvi_gamma(double u);
 PFVI_API int pfvi_two_point_coefficients(double omega, double h, double u_max, int literal, double out[6]);
+
+// pfvi_lobatto.c
+PFVI_INTERNAL int pfvi_lobatto_compute(int s, struct pfvi_lobatto* q);
+PFVI_INTERNAL enum pfvi_fit_status pfvi_stage_fit(const struct pfvi_lobatto* q, double omega, double h,
+        double u_max, int fitting, struct pfvi_stage_fit* fit);
+PFVI_API int pfvi_lobatto_table(int s, double* c, double* w, double* a);
+PFVI_API double pfvi_gamma_stages(int s, double u);
+PFVI_API int pfvi_stage_coefficients(int s, double u, double* out);
+
+// pfvi_stages.c
+PFVI_INTERNAL int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0, int reuse);
+
+// pfvi_integrator.c, shared with pfvi_stages.c
+PFVI_INTERNAL void pfvi_error(struct reb_simulation* r, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
+PFVI_INTERNAL void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0);
+PFVI_INTERNAL int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0);
+PFVI_INTERNAL int pfvi_particle_finite(const struct reb_particle* p);
 
 // pfvi_frequency.c
 PFVI_INTERNAL double pfvi_curvature_frequency(const double v[3], const double a[3]);

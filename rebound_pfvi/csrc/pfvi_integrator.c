@@ -33,7 +33,11 @@ const struct reb_integrator pfvi_integrator = {
     "form p_k = -D1 Ld, p_k+1 = D2 Ld (Marsden & West 2001, Acta Numerica 10, 357). "
     "With two nodes (stages = 2) the step is explicit and second order, needs one "
     "force evaluation (the acceleration at the end of a step is reused at the start "
-    "of the next), and with fitting = 'none' is exactly velocity Verlet. "
+    "of the next), and with fitting = 'none' is exactly velocity Verlet. With s = 3 "
+    "to 6 Gauss-Lobatto nodes and interior corrections (seed section 6; Marsden & "
+    "West 2001, section 2.6) the order is 2s - 2 and each step solves for the stage "
+    "points by fixed-point iteration, stopped as in IRKGL16 (Antonana, Makazaga & "
+    "Murua 2017, J. Comput. Phys.); a solve that does not converge is refused. "
     "Fixed steps of sim.dt, forward or backward. A step that cannot be taken "
     "(invalid option, non-finite particle or force, u at a pole) raises an error "
     "and leaves t and every particle bit-identical. See docs/method.md."
@@ -73,8 +77,11 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       REB_INT, "frequency", offsetof(struct pfvi_state, frequency), 0, 0, pfvi_frequency_enum },
     PFVI_FIELD("Frequency used when frequency = 'fixed' (code units of 1/time, finite, >= 0). Default 0.",
         REB_DOUBLE, omega),
-    PFVI_FIELD("Number of quadrature nodes of the discrete Lagrangian. Only 2 (nodes c = (0, 1), "
-        "weights (1/2, 1/2), second order) is implemented. Default 2.",
+    PFVI_FIELD("Number s of Gauss-Lobatto nodes of the discrete Lagrangian, 2 to 6; the order is "
+        "2s - 2. s = 2 (default): nodes 0 and 1, an explicit step with one force evaluation. "
+        "s >= 3: interior corrections delta q^j made stationary (seed section 6), solved by "
+        "fixed-point iteration with s - 1 force evaluations per iteration (s if forces depend "
+        "on velocities).",
         REB_INT, stages),
     PFVI_FIELD("Largest |u| = omega*|dt| used in the fitted coefficients; a larger value is "
         "limited to u_max and counted in n_u_limited. Must lie in (0, pi). The two-point "
@@ -88,6 +95,12 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         REB_UINT64, n_u_limited),
     PFVI_FIELD("Statistic: force evaluations (calls of reb_simulation_update_acceleration).",
         REB_UINT64, n_force_evaluations),
+    PFVI_FIELD("Statistic: iterations of the stage solve, summed over steps (1 per two-point step).",
+        REB_UINT64, n_iterations),
+    PFVI_FIELD("Statistic: most iterations of the stage solve in one step.",
+        REB_UINT64, iterations_max),
+    PFVI_FIELD("Statistic: n_iterations / n_steps.",
+        REB_DOUBLE, iterations_mean),
     PFVI_FIELD("Statistic: smallest omega used in the last step (after limiting).",
         REB_DOUBLE, omega_min),
     PFVI_FIELD("Statistic: largest omega used in the last step (after limiting).",
@@ -120,13 +133,16 @@ static void pfvi_free(void* state){
     free(s->dx);
     free(s->dv);
     free(s->compensation);
+    free(s->stage_fit);
+    free(s->stage_a);
+    free(s->unknowns);
+    free(s->unknowns_next);
     free(s);
 }
 
 // Reports an error through REBOUND; sim.integrate() raises it in Python.
 // REBOUND keeps at most 254 characters of a message.
-static void pfvi_error(struct reb_simulation* r, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
-static void pfvi_error(struct reb_simulation* r, const char* fmt, ...){
+void pfvi_error(struct reb_simulation* r, const char* fmt, ...){
     char msg[REB_STRING_SIZE_MAX];
     va_list args;
     va_start(args, fmt);
@@ -145,8 +161,9 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_state*
         pfvi_error(r, "pfvi: integrator.frequency = %d is not valid; allowed: 'curvature', 'fixed'.", s->frequency);
         return 0;
     }
-    if (s->stages != 2){
-        pfvi_error(r, "pfvi: integrator.stages = %d is not supported; allowed: 2.", s->stages);
+    if (s->stages < PFVI_STAGES_MIN || s->stages > PFVI_STAGES_MAX){
+        pfvi_error(r, "pfvi: integrator.stages = %d is not supported; allowed: %d to %d.",
+                s->stages, PFVI_STAGES_MIN, PFVI_STAGES_MAX);
         return 0;
     }
     if (s->frequency == PFVI_FREQUENCY_FIXED && !(isfinite(s->omega) && s->omega >= 0.)){
@@ -202,7 +219,16 @@ static int pfvi_ensure_scratch(struct reb_simulation* r, struct pfvi_state* s, s
     if (dx) s->dx = dx;
     struct reb_vec3d* dv = realloc(s->dv, N*sizeof(struct reb_vec3d));
     if (dv) s->dv = dv;
-    if (!start || !end || !fit || !v_rotated || !dx || !dv){
+    struct pfvi_stage_fit* stage_fit = realloc(s->stage_fit, N*sizeof(struct pfvi_stage_fit));
+    if (stage_fit) s->stage_fit = stage_fit;
+    double (*stage_a)[PFVI_STAGES_MAX][3] = realloc(s->stage_a, N*sizeof(*stage_a));
+    if (stage_a) s->stage_a = stage_a;
+    double (*unknowns)[PFVI_STAGES_MAX-1][3] = realloc(s->unknowns, N*sizeof(*unknowns));
+    if (unknowns) s->unknowns = unknowns;
+    double (*unknowns_next)[PFVI_STAGES_MAX-1][3] = realloc(s->unknowns_next, N*sizeof(*unknowns_next));
+    if (unknowns_next) s->unknowns_next = unknowns_next;
+    s->predictor_stages = 0;
+    if (!start || !end || !fit || !v_rotated || !dx || !dv || !stage_fit || !stage_a || !unknowns || !unknowns_next){
         pfvi_error(r, "pfvi: could not allocate scratch memory for %zu particles.", N);
         return 0;
     }
@@ -210,20 +236,16 @@ static int pfvi_ensure_scratch(struct reb_simulation* r, struct pfvi_state* s, s
     return 1;
 }
 
-static int pfvi_particle_finite(const struct reb_particle* p){
+int pfvi_particle_finite(const struct reb_particle* p){
     return isfinite(p->x) && isfinite(p->y) && isfinite(p->z)
         && isfinite(p->vx) && isfinite(p->vy) && isfinite(p->vz) && isfinite(p->m);
 }
 
-// Whether the accelerations kept from the end of the last step are those at
-// the start of this one, so that no force evaluation is needed (as in
-// velocity Verlet). Anything that may have changed the forces rules it out: a
-// new integrate() call (REBOUND resets dt_last_done to 0), a change of N, t
-// or G, velocity-dependent forces, or any bit of a position, velocity or mass.
+// Whether the particles, N, t and G are, bit for bit, those the last step
+// ended with (so that its stage values can seed this step's solve).
 static int pfvi_end_is_start(const struct reb_simulation* r, const struct pfvi_state* s){
     const size_t N = r->N;
-    if (s->cache_N != N || r->dt_last_done == 0. || r->force_is_velocity_dependent
-            || s->cache_t != r->t || s->cache_G != r->G){
+    if (s->cache_N != N || s->cache_t != r->t || s->cache_G != r->G){
         return 0;
     }
     const struct reb_particle* const ps = r->particles;
@@ -237,7 +259,7 @@ static int pfvi_end_is_start(const struct reb_simulation* r, const struct pfvi_s
 }
 
 // Puts every particle (all fields) and t back to the start of the step.
-static void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0){
+void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0){
     memcpy(r->particles, s->start, N*sizeof(struct reb_particle));
     r->t = t0;
     s->cache_N = 0;
@@ -246,7 +268,7 @@ static void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* s, size_
 // Evaluates forces through REBOUND, so that every gravity mode, additional
 // forces (REBOUNDx) and test particles are handled there. Returns 0, having
 // rolled back, if the forces are not finite or the callback changed N.
-static int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0){
+int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0){
     reb_simulation_update_acceleration(r);
     s->n_force_evaluations++;
     if (r->N != N){
@@ -303,52 +325,13 @@ static int pfvi_final_kick_velocity_dependent(struct reb_simulation* r, struct p
     return 0;
 }
 
-static void pfvi_step(struct reb_simulation* r, void* state){
-    struct pfvi_state* const s = state;
-    if (!s){
-        reb_simulation_error(r, "pfvi: integrator state missing (allocation failed).");
-        return;
-    }
-    if (!pfvi_options_valid(r, s)){
-        return;
-    }
+// The two-point step (stages = 2): explicit, with the closed form of
+// pfvi_fitting.c. Returns 0, rolled back with an error, if it is refused.
+static int pfvi_two_point_step(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0){
     const double h = r->dt;
-    const double t0 = r->t;
-    const size_t N = r->N;
-    if (N == 0){
-        r->t = t0 + h;
-        r->dt_last_done = h;
-        s->n_steps++;
-        return;
-    }
-    if (!pfvi_ensure_scratch(r, s, N)){
-        return;
-    }
-    r->gravity_ignore_terms = REB_GRAVITY_IGNORE_TERMS_NONE;
     struct reb_particle* const ps = r->particles;
     struct reb_particle* const p0 = s->start;
     struct pfvi_end_state* const e = s->end;
-
-    // e[i].a becomes the acceleration at the start of this step.
-    const int reuse = pfvi_end_is_start(r, s);
-    s->cache_N = 0;
-    if (!reuse){
-        for (size_t i=0; i<N; i++){
-            if (!pfvi_particle_finite(&ps[i])){
-                pfvi_error(r, "pfvi: particle %zu has a non-finite position, velocity or mass; step not taken.", i);
-                return;
-            }
-        }
-    }
-    memcpy(p0, ps, N*sizeof(struct reb_particle));
-    if (!reuse){
-        if (!pfvi_update_acceleration(r, s, N, t0)){
-            return;
-        }
-        for (size_t i=0; i<N; i++){
-            e[i].a[0] = ps[i].ax; e[i].a[1] = ps[i].ay; e[i].a[2] = ps[i].az;
-        }
-    }
 
     // Fit every particle before anything is written, so that a refusal is cheap.
     const int literal = (s->fitting == PFVI_FITTING_PHASE_LITERAL);
@@ -368,7 +351,7 @@ static void pfvi_step(struct reb_simulation* r, void* state){
             pfvi_error(r, "pfvi: particle %zu: u = omega*dt = %.6g is within %g of a pole of the two-point "
                     "coefficients (cos u = 0 or sin u = 0); step not taken. Lower u_max or dt.",
                     i, omega*h, PFVI_POLE_GUARD);
-            return;
+            return 0;
         }
         n_limited += (status == PFVI_FIT_LIMITED);
         omega_min = (s->fit[i].omega < omega_min) ? s->fit[i].omega : omega_min;
@@ -420,7 +403,7 @@ static void pfvi_step(struct reb_simulation* r, void* state){
 
     r->t = t0 + h;
     if (!pfvi_update_acceleration(r, s, N, t0)){
-        return;
+        return 0;
     }
     // Final kick; implicit only if the force depends on velocities.
     if (r->force_is_velocity_dependent){
@@ -428,7 +411,7 @@ static void pfvi_step(struct reb_simulation* r, void* state){
             s->v_rotated[i] = (struct reb_vec3d){ps[i].vx, ps[i].vy, ps[i].vz};
         }
         if (!pfvi_final_kick_velocity_dependent(r, s, N, t0)){
-            return;
+            return 0;
         }
     }
     for (size_t i=0; i<N; i++){
@@ -455,7 +438,7 @@ static void pfvi_step(struct reb_simulation* r, void* state){
         if (!pfvi_particle_finite(&ps[i])){
             pfvi_roll_back(r, s, N, t0);
             pfvi_error(r, "pfvi: particle %zu became non-finite in the step from t = %.17g; step not taken, state restored.", i, t0);
-            return;
+            return 0;
         }
     }
 
@@ -473,11 +456,74 @@ static void pfvi_step(struct reb_simulation* r, void* state){
             *comp = (struct pfvi_compensation){{0., 0., 0.}, {0., 0., 0.}};
         }
     }
-    r->dt_last_done = h;
-    s->n_steps++;
+    s->n_iterations++;
+    s->iterations_max = (s->iterations_max < 1) ? 1 : s->iterations_max;
+    s->predictor_stages = 0;
     s->n_u_limited += n_limited;
     s->omega_min = omega_min;
     s->omega_max = omega_max;
+    return 1;
+}
+
+static void pfvi_step(struct reb_simulation* r, void* state){
+    struct pfvi_state* const s = state;
+    if (!s){
+        reb_simulation_error(r, "pfvi: integrator state missing (allocation failed).");
+        return;
+    }
+    if (!pfvi_options_valid(r, s)){
+        return;
+    }
+    const double h = r->dt;
+    const double t0 = r->t;
+    const size_t N = r->N;
+    if (N == 0){
+        r->t = t0 + h;
+        r->dt_last_done = h;
+        s->n_steps++;
+        return;
+    }
+    if (!pfvi_ensure_scratch(r, s, N)){
+        return;
+    }
+    r->gravity_ignore_terms = REB_GRAVITY_IGNORE_TERMS_NONE;
+    struct reb_particle* const ps = r->particles;
+    struct reb_particle* const p0 = s->start;
+    struct pfvi_end_state* const e = s->end;
+
+    // e[i].a becomes the acceleration at the start of this step. It is kept
+    // from the last step unless anything may have changed the forces: a new
+    // integrate() call (REBOUND resets dt_last_done to 0), velocity-dependent
+    // forces, or any bit of N, t, G, a position, velocity or mass.
+    const int contiguous = pfvi_end_is_start(r, s);
+    const int reuse = contiguous && r->dt_last_done != 0. && !r->force_is_velocity_dependent;
+    s->cache_N = 0;
+    if (!reuse){
+        for (size_t i=0; i<N; i++){
+            if (!pfvi_particle_finite(&ps[i])){
+                pfvi_error(r, "pfvi: particle %zu has a non-finite position, velocity or mass; step not taken.", i);
+                return;
+            }
+        }
+    }
+    memcpy(p0, ps, N*sizeof(struct reb_particle));
+    if (!reuse){
+        if (!pfvi_update_acceleration(r, s, N, t0)){
+            return;
+        }
+        for (size_t i=0; i<N; i++){
+            e[i].a[0] = ps[i].ax; e[i].a[1] = ps[i].ay; e[i].a[2] = ps[i].az;
+        }
+    }
+
+    const int taken = (s->stages == 2) ? pfvi_two_point_step(r, s, N, t0)
+                                       : pfvi_stages_step(r, s, N, t0, contiguous);
+    if (!taken){
+        return;
+    }
+    r->dt_last_done = h;
+    s->n_steps++;
+    s->iterations_mean = (double)s->n_iterations/(double)s->n_steps;
     // The end of this step is the start of the next.
     for (size_t i=0; i<N; i++){
         memcpy(e[i].xv, &ps[i].x, sizeof(e[i].xv));

@@ -1,0 +1,346 @@
+/**
+ * pfvi_stages.c: one step of the s-point discrete Lagrangian with interior
+ * corrections (seed section 6), s = 3 .. 6.
+ *
+ * Per particle and per Cartesian component (units of unit mass), the step
+ * solves, for the unknowns Delta = q_k+1 - q_k and delta q^j (interior j),
+ *     sum_k w_k [B^k qd^k + h^2 b^k a^k]     = -G h v_k         (p_k = -D1 Ld)
+ *     sum_k w_k a^k_j qd^k + h^2 w_j a^j     = 0                (dLd/d delta q^j = 0)
+ * with qd^k = h qdot^k = beta_d^k q_k + Bbar^k Delta + sum_l a^k_l delta q^l and
+ * a^k the acceleration at the stage point q^k = (1 + beta_m^k) q_k + bbar^k Delta
+ * + delta q^k at t_k + c^k h, and then takes
+ *     G h (v_k+1 - v_k) = sum_k w_k [beta_d^k qd^k + h^2 (b^k + bbar^k) a^k]
+ * (p_k+1 = D2 Ld minus p_k = -D1 Ld). For given a^k the equations are linear
+ * with a matrix that depends only on u (factorised in pfvi_lobatto.c), so the
+ * solve is a fixed-point iteration: solve the linear system, evaluate forces
+ * at the new stage points through REBOUND, repeat. It stops when the largest
+ * change of the unknowns is zero or stops decreasing (the criterion of
+ * IRKGL16, Antonana, Makazaga & Murua 2017); it has converged if that change
+ * is at round-off level, and the step is refused otherwise.
+ *
+ * The first iterate uses the stage accelerations of the previous step,
+ * extrapolated by their interpolating polynomial, when the previous step ended
+ * where this one starts.
+ */
+#include <float.h>
+#include <math.h>
+#include <string.h>
+#include "pfvi.h"
+
+// Solves the linear part for one particle: unknowns y[e][component] from the
+// stage accelerations sa[k][component].
+static void stage_solve_linear(const struct pfvi_lobatto* q, const struct pfvi_stage_fit* f,
+        const struct reb_particle* p0, double h, const double (*sa)[3], double (*y)[3]){
+    const int s = q->s, m = s - 1;
+    const double h2 = h*h;
+    const double q0[3] = {p0->x, p0->y, p0->z};
+    const double v0[3] = {p0->vx, p0->vy, p0->vz};
+    for (int c=0; c<3; c++){
+        double force = 0.;
+        for (int k=0; k<s; k++){
+            force += q->w[k]*f->b[k]*sa[k][c];
+        }
+        y[0][c] = -f->G*h*v0[c] - h2*force - f->q0_row[0]*q0[c];
+        for (int j=1; j<m; j++){
+            y[j][c] = -h2*q->w[j]*sa[j][c] - f->q0_row[j]*q0[c];
+        }
+    }
+    // Forward and back substitution with the stored LU factors and pivots.
+    for (int k=0; k<m; k++){
+        const int p = f->pivot[k];
+        if (p != k){
+            for (int c=0; c<3; c++){
+                const double tmp = y[k][c]; y[k][c] = y[p][c]; y[p][c] = tmp;
+            }
+        }
+        for (int i=k+1; i<m; i++){
+            for (int c=0; c<3; c++){
+                y[i][c] -= f->lu[i][k]*y[k][c];
+            }
+        }
+    }
+    for (int k=m-1; k>=0; k--){
+        for (int c=0; c<3; c++){
+            double sum = y[k][c];
+            for (int j=k+1; j<m; j++){
+                sum -= f->lu[k][j]*y[j][c];
+            }
+            y[k][c] = sum/f->lu[k][k];
+        }
+    }
+}
+
+// Stage point k of one particle. The last stage is q_k + (Delta + carried
+// low-order part), exactly the position the step will end on.
+static void stage_position(const struct pfvi_lobatto* q, const struct pfvi_stage_fit* f,
+        const struct reb_particle* p0, const struct pfvi_compensation* comp, const double (*y)[3],
+        int k, double x[3]){
+    const double q0[3] = {p0->x, p0->y, p0->z};
+    const int s = q->s;
+    for (int c=0; c<3; c++){
+        if (k == 0){
+            x[c] = q0[c];
+        }else if (k == s - 1){
+            x[c] = q0[c] + (y[0][c] + comp->x[c]);
+        }else{
+            x[c] = q0[c] + (f->beta_m[k]*q0[c] + f->bbar[k]*y[0][c] + y[k][c]);
+        }
+    }
+}
+
+// h qdot^k of one particle.
+static void stage_velocity_times_h(const struct pfvi_lobatto* q, const struct pfvi_stage_fit* f,
+        const struct reb_particle* p0, const double (*y)[3], int k, double qd[3]){
+    const double q0[3] = {p0->x, p0->y, p0->z};
+    const int s = q->s;
+    for (int c=0; c<3; c++){
+        double sum = f->beta_d[k]*q0[c] + f->Bbar[k]*y[0][c];
+        for (int l=1; l<s-1; l++){
+            sum += q->a[k][l]*y[l][c];
+        }
+        qd[c] = sum;
+    }
+}
+
+// Evaluates the forces at every stage point of the current iterate (and at
+// the first node too when forces depend on velocities, since its velocity is
+// the interpolant's, not v_k). Returns 0, rolled back, on a failure.
+static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){
+    const struct pfvi_lobatto* const q = &st->lobatto;
+    const int s = q->s;
+    const int vdep = r->force_is_velocity_dependent;
+    struct reb_particle* const ps = r->particles;
+    for (int k=vdep ? 0 : 1; k<s; k++){
+        for (size_t i=0; i<N; i++){
+            double x[3];
+            stage_position(q, &st->stage_fit[i], &st->start[i], &st->compensation[i], st->unknowns[i], k, x);
+            ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
+            if (vdep){
+                double qd[3];
+                stage_velocity_times_h(q, &st->stage_fit[i], &st->start[i], st->unknowns[i], k, qd);
+                ps[i].vx = qd[0]/h; ps[i].vy = qd[1]/h; ps[i].vz = qd[2]/h;
+            }
+        }
+        r->t = t0 + q->c[k]*h;
+        if (!pfvi_update_acceleration(r, st, N, t0)){
+            return 0;
+        }
+        for (size_t i=0; i<N; i++){
+            st->stage_a[i][k][0] = ps[i].ax;
+            st->stage_a[i][k][1] = ps[i].ay;
+            st->stage_a[i][k][2] = ps[i].az;
+        }
+    }
+    return 1;
+}
+
+// First iterate of the stage accelerations: the previous step's, extrapolated
+// along their interpolating polynomial to this step's nodes, or the start
+// acceleration at every node.
+static void stage_predict(struct pfvi_state* st, size_t N, double h, int contiguous, const double (*a_start)[3]){
+    const struct pfvi_lobatto* const q = &st->lobatto;
+    const int s = q->s;
+    const int extrapolate = contiguous && st->predictor_stages == s && st->predictor_h != 0.;
+    double x[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
+    if (extrapolate){
+        // x[j][m] = l_m(1 + rho c^j): the Lagrange basis of the last step's
+        // nodes at this step's, in units of the last step.
+        const double rho = h/st->predictor_h;
+        for (int j=0; j<s; j++){
+            const double tau = 1. + rho*q->c[j];
+            for (int m=0; m<s; m++){
+                double l = 1.;
+                for (int n=0; n<s; n++){
+                    if (n != m) l *= (tau - q->c[n])/(q->c[m] - q->c[n]);
+                }
+                x[j][m] = l;
+            }
+        }
+    }
+    for (size_t i=0; i<N; i++){
+        double previous[PFVI_STAGES_MAX][3];
+        memcpy(previous, st->stage_a[i], sizeof(previous));
+        for (int k=0; k<s; k++){
+            for (int c=0; c<3; c++){
+                if (k == 0 || !extrapolate){
+                    st->stage_a[i][k][c] = a_start[i][c];
+                }else{
+                    double sum = 0.;
+                    for (int m=0; m<s; m++){
+                        sum += x[k][m]*previous[m][c];
+                    }
+                    st->stage_a[i][k][c] = sum;
+                }
+            }
+        }
+    }
+}
+
+int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, int contiguous){
+    const double h = r->dt;
+    struct pfvi_lobatto* const q = &st->lobatto;
+    if (q->s != st->stages){
+        pfvi_lobatto_compute(st->stages, q);
+        st->predictor_stages = 0;
+    }
+    const int s = q->s, m = s - 1;
+    struct reb_particle* const ps = r->particles;
+    struct reb_particle* const p0 = st->start;
+    const struct pfvi_end_state* const e = st->end;
+
+    // Fit every particle before anything is written. Particles sharing u
+    // (all of them for "none" or a fixed omega) share the work.
+    const int fitted = (st->fitting != PFVI_FITTING_NONE);
+    const int fixed = (st->frequency == PFVI_FREQUENCY_FIXED);
+    uint64_t n_limited = 0;
+    double omega_min = INFINITY, omega_max = 0.;
+    double omega_last = NAN;
+    enum pfvi_fit_status status_last = PFVI_FIT_OK;
+    for (size_t i=0; i<N; i++){
+        double omega = 0.;
+        if (fitted){
+            const double v[3] = {p0[i].vx, p0[i].vy, p0[i].vz};
+            omega = fixed ? st->omega : pfvi_curvature_frequency(v, e[i].a);
+        }
+        enum pfvi_fit_status status;
+        if (i > 0 && omega == omega_last){
+            st->stage_fit[i] = st->stage_fit[i-1];
+            status = status_last;
+        }else{
+            status = pfvi_stage_fit(q, omega, h, st->u_max, st->fitting, &st->stage_fit[i]);
+        }
+        omega_last = omega;
+        status_last = status;
+        if (status == PFVI_FIT_POLE){
+            pfvi_roll_back(r, st, N, t0);
+            pfvi_error(r, "pfvi: particle %zu: u = omega*dt = %.6g is within %g of a singularity of the "
+                    "%d-stage fitted coefficients; step not taken. Lower u_max or dt.",
+                    i, omega*h, PFVI_POLE_GUARD, s);
+            return 0;
+        }
+        n_limited += (status == PFVI_FIT_LIMITED);
+        omega_min = fmin(omega_min, st->stage_fit[i].omega);
+        omega_max = fmax(omega_max, st->stage_fit[i].omega);
+    }
+
+    double (*a_start)[3] = (double (*)[3])st->dx;  // scratch: the start accelerations
+    for (size_t i=0; i<N; i++){
+        memcpy(a_start[i], e[i].a, sizeof(a_start[i]));
+    }
+    stage_predict(st, N, h, contiguous, (const double (*)[3])a_start);
+
+    // Fixed-point iteration; `unknowns` is the iterate at which the forces
+    // in stage_a were evaluated (after the first round).
+    double previous = INFINITY, change = INFINITY;
+    int rounds = 0, converged = 0;
+    for (int iteration=0; iteration<=PFVI_STAGE_MAX_ITERATIONS; iteration++){
+        change = 0.;
+        for (size_t i=0; i<N; i++){
+            stage_solve_linear(q, &st->stage_fit[i], &p0[i], h, (const double (*)[3])st->stage_a[i], st->unknowns_next[i]);
+            if (iteration == 0){
+                continue;
+            }
+            const double (*y)[3] = st->unknowns[i];
+            const double (*yn)[3] = st->unknowns_next[i];
+            double scale = fmax(fabs(p0[i].x), fmax(fabs(p0[i].y), fabs(p0[i].z)));
+            double diff = 0.;
+            for (int j=0; j<m; j++){
+                for (int c=0; c<3; c++){
+                    diff = fmax(diff, fabs(yn[j][c] - y[j][c]));
+                }
+            }
+            for (int c=0; c<3; c++){
+                scale = fmax(scale, fabs(y[0][c]));
+            }
+            // Written so that a NaN makes the change NaN, not 0.
+            const double relative = (scale > 0.) ? diff/scale : diff;
+            change = (relative > change || relative != relative) ? relative : change;
+        }
+        if (iteration > 0){
+            if (!isfinite(change)){
+                break;
+            }
+            if (change == 0. || change >= previous){
+                converged = (change <= PFVI_STAGE_TOLERANCE);
+                break;
+            }
+        }
+        if (iteration == PFVI_STAGE_MAX_ITERATIONS){
+            converged = (change <= PFVI_STAGE_TOLERANCE);
+            break;
+        }
+        double (*swap)[PFVI_STAGES_MAX-1][3] = st->unknowns;
+        st->unknowns = st->unknowns_next;
+        st->unknowns_next = swap;
+        if (!stage_forces(r, st, N, t0, h)){
+            st->predictor_stages = 0;
+            return 0;
+        }
+        rounds++;
+        previous = (iteration == 0) ? INFINITY : change;
+    }
+    st->n_iterations += rounds;
+    st->iterations_max = (rounds > (int)st->iterations_max) ? (uint64_t)rounds : st->iterations_max;
+    if (!converged){
+        pfvi_roll_back(r, st, N, t0);
+        st->predictor_stages = 0;
+        pfvi_error(r, "pfvi: the %d-stage solve did not converge (relative change %.3g after %d iterations) "
+                "in the step from t = %.17g; step not taken, state restored. Lower dt.", s, change, rounds, t0);
+        return 0;
+    }
+
+    // p_k+1 from the converged stages; x and v advance by compensated increments.
+    const double h2 = h*h;
+    for (size_t i=0; i<N; i++){
+        const struct pfvi_stage_fit* const f = &st->stage_fit[i];
+        struct pfvi_compensation* const comp = &st->compensation[i];
+        const double (*y)[3] = st->unknowns[i];
+        double dv[3] = {0., 0., 0.};
+        for (int k=0; k<s; k++){
+            double qd[3];
+            stage_velocity_times_h(q, f, &p0[i], y, k, qd);
+            const double wk = q->w[k], wf = h2*(1. + f->beta_m[k]);
+            for (int c=0; c<3; c++){
+                dv[c] += wk*(f->beta_d[k]*qd[c] + wf*st->stage_a[i][k][c]);
+            }
+        }
+        const double gh = f->G*h;
+        double x[3];
+        stage_position(q, f, &p0[i], comp, y, s - 1, x);
+        ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
+        const double inc_v[3] = {dv[0]/gh + comp->v[0], dv[1]/gh + comp->v[1], dv[2]/gh + comp->v[2]};
+        ps[i].vx = p0[i].vx + inc_v[0];
+        ps[i].vy = p0[i].vy + inc_v[1];
+        ps[i].vz = p0[i].vz + inc_v[2];
+        ps[i].ax = st->stage_a[i][s-1][0];
+        ps[i].ay = st->stage_a[i][s-1][1];
+        ps[i].az = st->stage_a[i][s-1][2];
+        // Kept in dv until the step is known to be taken.
+        st->dv[i] = (struct reb_vec3d){inc_v[0], inc_v[1], inc_v[2]};
+    }
+    r->t = t0 + h;
+    for (size_t i=0; i<N; i++){
+        if (!pfvi_particle_finite(&ps[i])){
+            pfvi_roll_back(r, st, N, t0);
+            st->predictor_stages = 0;
+            pfvi_error(r, "pfvi: particle %zu became non-finite in the step from t = %.17g; step not taken, state restored.", i, t0);
+            return 0;
+        }
+    }
+    for (size_t i=0; i<N; i++){
+        struct pfvi_compensation* const comp = &st->compensation[i];
+        const double (*y)[3] = st->unknowns[i];
+        comp->x[0] = (y[0][0] + comp->x[0]) - (ps[i].x - p0[i].x);
+        comp->x[1] = (y[0][1] + comp->x[1]) - (ps[i].y - p0[i].y);
+        comp->x[2] = (y[0][2] + comp->x[2]) - (ps[i].z - p0[i].z);
+        comp->v[0] = st->dv[i].x - (ps[i].vx - p0[i].vx);
+        comp->v[1] = st->dv[i].y - (ps[i].vy - p0[i].vy);
+        comp->v[2] = st->dv[i].z - (ps[i].vz - p0[i].vz);
+    }
+    st->predictor_stages = s;
+    st->predictor_h = h;
+    st->n_u_limited += n_limited;
+    st->omega_min = omega_min;
+    st->omega_max = omega_max;
+    return 1;
+}
