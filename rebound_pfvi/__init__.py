@@ -23,13 +23,21 @@ import ctypes as _ctypes
 from ._core import INTEGRATOR_NAME, lib as _lib
 
 __version__ = "0.1.0"
-__all__ = ["INTEGRATOR_NAME", "FITTINGS", "FREQUENCIES", "seed_coefficients", "gamma",
-           "two_point_coefficients"]
+__all__ = ["INTEGRATOR_NAME", "FITTINGS", "FREQUENCIES", "STAGES", "seed_coefficients", "gamma",
+           "two_point_coefficients", "lobatto", "stage_coefficients"]
 
 #: Values of the ``fitting`` field, in the order of the C enum.
 FITTINGS = ("phase", "phase-literal", "none")
 #: Values of the ``frequency`` field, in the order of the C enum.
 FREQUENCIES = ("curvature", "fixed")
+#: Allowed values of the ``stages`` field.
+STAGES = (2, 3, 4, 5, 6)
+
+
+def _check_stages(s):
+    if s not in STAGES:
+        raise ValueError(f"s={s!r} is not valid; allowed: {', '.join(map(str, STAGES))}")
+    return int(s)
 
 
 def seed_coefficients(u, c):
@@ -67,4 +75,40 @@ def two_point_coefficients(omega, h, u_max=1.0, fitting="phase"):
     keys = ("omega", "cos_u", "h_sinc_u", "omega_sin_u", "half_kick", "gamma")
     result = dict(zip(keys, out))
     result["limited"] = bool(status == 1)
+    return result
+
+
+def lobatto(s):
+    """The Gauss-Lobatto rule of the s-stage discrete Lagrangian, as the C core computes it.
+
+    Returns numpy arrays ``(c, w, a)``: nodes on [0, 1], weights, and the
+    differentiation matrix ``a[k, j]`` with ``sum_j a[k, j] c[j]**n = n c[k]**(n-1)``
+    (seed section 6).
+    """
+    import numpy as np
+
+    s = _check_stages(s)
+    c, w, a = (_ctypes.c_double * s)(), (_ctypes.c_double * s)(), (_ctypes.c_double * (s * s))()
+    _lib.pfvi_lobatto_table(s, c, w, a)
+    return np.array(c), np.array(w), np.array(a).reshape(s, s)
+
+
+def stage_coefficients(s, u):
+    """The fitted stage coefficients of the s-stage step at u = omega h.
+
+    Returns a dict of numpy arrays over the nodes: the seed's ``b``, ``bbar``,
+    ``B``, ``Bbar``, the combinations ``beta_m`` = b + bbar - 1 and ``beta_d``
+    = B + Bbar, and the scalars ``gamma`` (the momentum normalisation of
+    fitting "phase") and ``det_ratio`` (determinant of the stage matrix over
+    its value at u = 0; steps where it is below 1e-3 are refused).
+    """
+    import numpy as np
+
+    s = _check_stages(s)
+    out = (_ctypes.c_double * (2 + 6 * s))()
+    _lib.pfvi_stage_coefficients(s, float(u), out)
+    values = np.array(out)
+    result = {"gamma": float(values[0]), "det_ratio": float(values[1])}
+    for k, name in enumerate(("b", "bbar", "B", "Bbar", "beta_m", "beta_d")):
+        result[name] = values[2 + k * s: 2 + (k + 1) * s]
     return result

@@ -30,6 +30,10 @@ lib.pfvi_seed_coefficients.restype = None
 lib.pfvi_seed_coefficients.argtypes = [ctypes.c_double, ctypes.c_double, ctypes.POINTER(ctypes.c_double)]
 lib.pfvi_gamma.restype = ctypes.c_double
 lib.pfvi_gamma.argtypes = [ctypes.c_double]
+lib.pfvi_lobatto_table.restype = ctypes.c_int
+lib.pfvi_lobatto_table.argtypes = [ctypes.c_int] + [ctypes.POINTER(ctypes.c_double)] * 3
+lib.pfvi_stage_coefficients.restype = ctypes.c_int
+lib.pfvi_stage_coefficients.argtypes = [ctypes.c_int, ctypes.c_double, ctypes.POINTER(ctypes.c_double)]
 lib.pfvi_two_point_coefficients.restype = ctypes.c_int
 lib.pfvi_two_point_coefficients.argtypes = [ctypes.c_double, ctypes.c_double, ctypes.c_double,
                                             ctypes.c_int, ctypes.POINTER(ctypes.c_double)]

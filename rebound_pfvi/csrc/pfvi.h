@@ -146,8 +146,13 @@ struct pfvi_state {
     double (*stage_a)[PFVI_STAGES_MAX][3];
     double (*unknowns)[PFVI_STAGES_MAX-1][3];
     double (*unknowns_next)[PFVI_STAGES_MAX-1][3];
-    int predictor_stages;          // s of the step whose stage_a may seed the next solve (0: none)
+    // The last step's stage accelerations seed the next solve if it starts
+    // where that step ended (same s, N and t). Saved in Simulationarchives
+    // with stage_a, so that a continued run is bit-identical.
+    int predictor_stages;          // s of that step (0: none)
+    size_t predictor_N;
     double predictor_h;
+    double predictor_t;            // t at its end
     size_t cache_N;                // >0: `end` describes the particles, taken at cache_t with cache_G
     double cache_t;
     double cache_G;
@@ -170,7 +175,7 @@ PFVI_API double pfvi_gamma_stages(int s, double u);
 PFVI_API int pfvi_stage_coefficients(int s, double u, double* out);
 
 // pfvi_stages.c
-PFVI_INTERNAL int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0, int reuse);
+PFVI_INTERNAL int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0);
 
 // pfvi_integrator.c, shared with pfvi_stages.c
 PFVI_INTERNAL void pfvi_error(struct reb_simulation* r, const char* fmt, ...) __attribute__((format(printf, 2, 3)));

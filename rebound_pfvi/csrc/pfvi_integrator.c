@@ -90,6 +90,11 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         REB_DOUBLE, u_max),
     { "", REB_POINTER, "compensation", offsetof(struct pfvi_state, compensation),
         offsetof(struct pfvi_state, N_compensation), sizeof(struct pfvi_compensation), 0 },
+    { "", REB_POINTER, "stage_accelerations", offsetof(struct pfvi_state, stage_a),
+        offsetof(struct pfvi_state, predictor_N), sizeof(*((struct pfvi_state*)0)->stage_a), 0 },
+    { "", REB_INT, "predictor_stages", offsetof(struct pfvi_state, predictor_stages), 0, 0, 0 },
+    { "", REB_DOUBLE, "predictor_h", offsetof(struct pfvi_state, predictor_h), 0, 0, 0 },
+    { "", REB_DOUBLE, "predictor_t", offsetof(struct pfvi_state, predictor_t), 0, 0, 0 },
     PFVI_FIELD("Statistic: steps taken by this integrator.", REB_UINT64, n_steps),
     PFVI_FIELD("Statistic: particle-steps in which u = omega*dt exceeded u_max and was limited.",
         REB_UINT64, n_u_limited),
@@ -223,11 +228,16 @@ static int pfvi_ensure_scratch(struct reb_simulation* r, struct pfvi_state* s, s
     if (stage_fit) s->stage_fit = stage_fit;
     double (*stage_a)[PFVI_STAGES_MAX][3] = realloc(s->stage_a, N*sizeof(*stage_a));
     if (stage_a) s->stage_a = stage_a;
+    if (s->predictor_N > N){
+        // Only after a Simulationarchive load with fewer particles: the buffer
+        // now holds N; an archive must never write more than it holds.
+        s->predictor_N = 0;
+        s->predictor_stages = 0;
+    }
     double (*unknowns)[PFVI_STAGES_MAX-1][3] = realloc(s->unknowns, N*sizeof(*unknowns));
     if (unknowns) s->unknowns = unknowns;
     double (*unknowns_next)[PFVI_STAGES_MAX-1][3] = realloc(s->unknowns_next, N*sizeof(*unknowns_next));
     if (unknowns_next) s->unknowns_next = unknowns_next;
-    s->predictor_stages = 0;
     if (!start || !end || !fit || !v_rotated || !dx || !dv || !stage_fit || !stage_a || !unknowns || !unknowns_next){
         pfvi_error(r, "pfvi: could not allocate scratch memory for %zu particles.", N);
         return 0;
@@ -241,8 +251,7 @@ int pfvi_particle_finite(const struct reb_particle* p){
         && isfinite(p->vx) && isfinite(p->vy) && isfinite(p->vz) && isfinite(p->m);
 }
 
-// Whether the particles, N, t and G are, bit for bit, those the last step
-// ended with (so that its stage values can seed this step's solve).
+// Whether the particles, N, t and G are, bit for bit, those the last step ended with.
 static int pfvi_end_is_start(const struct reb_simulation* r, const struct pfvi_state* s){
     const size_t N = r->N;
     if (s->cache_N != N || s->cache_t != r->t || s->cache_G != r->G){
@@ -495,8 +504,7 @@ static void pfvi_step(struct reb_simulation* r, void* state){
     // from the last step unless anything may have changed the forces: a new
     // integrate() call (REBOUND resets dt_last_done to 0), velocity-dependent
     // forces, or any bit of N, t, G, a position, velocity or mass.
-    const int contiguous = pfvi_end_is_start(r, s);
-    const int reuse = contiguous && r->dt_last_done != 0. && !r->force_is_velocity_dependent;
+    const int reuse = r->dt_last_done != 0. && !r->force_is_velocity_dependent && pfvi_end_is_start(r, s);
     s->cache_N = 0;
     if (!reuse){
         for (size_t i=0; i<N; i++){
@@ -517,7 +525,7 @@ static void pfvi_step(struct reb_simulation* r, void* state){
     }
 
     const int taken = (s->stages == 2) ? pfvi_two_point_step(r, s, N, t0)
-                                       : pfvi_stages_step(r, s, N, t0, contiguous);
+                                       : pfvi_stages_step(r, s, N, t0);
     if (!taken){
         return;
     }

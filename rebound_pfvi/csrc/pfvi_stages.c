@@ -137,10 +137,11 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
 // First iterate of the stage accelerations: the previous step's, extrapolated
 // along their interpolating polynomial to this step's nodes, or the start
 // acceleration at every node.
-static void stage_predict(struct pfvi_state* st, size_t N, double h, int contiguous, const double (*a_start)[3]){
+static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h, const double (*a_start)[3]){
     const struct pfvi_lobatto* const q = &st->lobatto;
     const int s = q->s;
-    const int extrapolate = contiguous && st->predictor_stages == s && st->predictor_h != 0.;
+    const int extrapolate = st->predictor_stages == s && st->predictor_N == N && st->predictor_t == t0
+        && st->predictor_h != 0.;
     double x[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
     if (extrapolate){
         // x[j][m] = l_m(1 + rho c^j): the Lagrange basis of the last step's
@@ -176,7 +177,7 @@ static void stage_predict(struct pfvi_state* st, size_t N, double h, int contigu
     }
 }
 
-int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, int contiguous){
+int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
     const double h = r->dt;
     struct pfvi_lobatto* const q = &st->lobatto;
     if (q->s != st->stages){
@@ -227,7 +228,7 @@ int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, 
     for (size_t i=0; i<N; i++){
         memcpy(a_start[i], e[i].a, sizeof(a_start[i]));
     }
-    stage_predict(st, N, h, contiguous, (const double (*)[3])a_start);
+    stage_predict(st, N, t0, h, (const double (*)[3])a_start);
 
     // Fixed-point iteration; `unknowns` is the iterate at which the forces
     // in stage_a were evaluated (after the first round).
@@ -338,7 +339,9 @@ int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, 
         comp->v[2] = st->dv[i].z - (ps[i].vz - p0[i].vz);
     }
     st->predictor_stages = s;
+    st->predictor_N = N;
     st->predictor_h = h;
+    st->predictor_t = r->t;
     st->n_u_limited += n_limited;
     st->omega_min = omega_min;
     st->omega_max = omega_max;
