@@ -7,10 +7,17 @@ import rebound
 from conftest import snapshot, two_body
 
 
-def pfvi_sim():
+@pytest.fixture(params=[2, 3, 4, 5, 6], ids=lambda s: f"s={s}")
+def stages(request):
+    """Every bad-input case is checked for every number of stages."""
+    return request.param
+
+
+def pfvi_sim(stages=2):
     sim = two_body(1e-3, e=0.3, com=True)
     sim.add(m=0.0, a=2.0, e=0.1, primary=sim.particles[0])
     sim.integrator = "pfvi"
+    sim.integrator.stages = stages
     sim.dt = 0.01
     sim.integrate(0.5)  # mid-run, with a force already kept from the last step
     return sim
@@ -42,29 +49,29 @@ def set_raw(sim, field, value):
     ("u_max", 3.2, r"integrator\.u_max = 3\.2 is not valid"),
     ("u_max", math.nan, r"integrator\.u_max = nan"),
 ])
-def test_invalid_field_values(field, value, match):
-    sim = pfvi_sim()
+def test_invalid_field_values(field, value, match, stages):
+    sim = pfvi_sim(stages)
     set_raw(sim, field, value)
     assert_refused(sim, match)
 
 
 @pytest.mark.parametrize("omega", [-1.0, math.nan, math.inf])
-def test_invalid_omega_with_fixed_frequency(omega):
-    sim = pfvi_sim()
+def test_invalid_omega_with_fixed_frequency(omega, stages):
+    sim = pfvi_sim(stages)
     sim.integrator.frequency = "fixed"
     sim.integrator.omega = omega
     assert_refused(sim, r"integrator\.omega = .* with frequency 'fixed'")
 
 
-def test_negative_omega_is_ignored_with_curvature_frequency():
-    sim = pfvi_sim()
+def test_negative_omega_is_ignored_with_curvature_frequency(stages):
+    sim = pfvi_sim(stages)
     sim.integrator.omega = -1.0
     sim.integrate(0.6)
     assert sim.t == 0.6
 
 
-def test_unknown_enum_name_names_the_allowed_values():
-    sim = pfvi_sim()
+def test_unknown_enum_name_names_the_allowed_values(stages):
+    sim = pfvi_sim(stages)
     with pytest.raises(AttributeError, match="phase, phase-literal, none"):
         sim.integrator.fitting = "exponential"
     with pytest.raises(AttributeError, match="curvature, fixed"):
@@ -72,16 +79,16 @@ def test_unknown_enum_name_names_the_allowed_values():
 
 
 @pytest.mark.parametrize("dt, exact_finish_time", [(0.0, 1), (math.nan, 1), (math.inf, 0), (-math.inf, 0)])
-def test_invalid_time_step(dt, exact_finish_time):
-    sim = pfvi_sim()
+def test_invalid_time_step(dt, exact_finish_time, stages):
+    sim = pfvi_sim(stages)
     sim.dt = dt
     # dt = 0 would otherwise never reach t; pfvi refuses the step instead.
     assert_refused(sim, r"sim\.dt = .* must be finite and non-zero", exact_finish_time=exact_finish_time)
 
 
-def test_infinite_time_step_is_shortened_by_exact_finish_time():
+def test_infinite_time_step_is_shortened_by_exact_finish_time(stages):
     # REBOUND shortens a step that would overshoot to tmax - t before pfvi sees it.
-    sim = pfvi_sim()
+    sim = pfvi_sim(stages)
     sim.dt = math.inf
     sim.integrate(0.6)
     assert sim.t == 0.6
@@ -89,14 +96,14 @@ def test_infinite_time_step_is_shortened_by_exact_finish_time():
 
 @pytest.mark.parametrize("attribute", ["x", "y", "z", "vx", "vy", "vz", "m"])
 @pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
-def test_non_finite_particle_is_named(attribute, value):
-    sim = pfvi_sim()
+def test_non_finite_particle_is_named(attribute, value, stages):
+    sim = pfvi_sim(stages)
     setattr(sim.particles[1], attribute, value)
     assert_refused(sim, r"particle 1 has a non-finite position, velocity or mass")
 
 
-def test_non_finite_force_rolls_back():
-    sim = pfvi_sim()
+def test_non_finite_force_rolls_back(stages):
+    sim = pfvi_sim(stages)
     calls = {"n": 0}
 
     def force(simp):
@@ -108,7 +115,7 @@ def test_non_finite_force_rolls_back():
     assert_refused(sim, r"force on particle 2 is not finite")
 
 
-def test_pole_of_the_coefficients_is_refused():
+def test_pole_of_the_two_point_coefficients_is_refused():
     sim = pfvi_sim()
     sim.integrator.frequency = "fixed"
     sim.integrator.u_max = 3.0
@@ -116,8 +123,19 @@ def test_pole_of_the_coefficients_is_refused():
     assert_refused(sim, r"particle 0: u = omega\*dt = 1\.5708 is within 0\.001 of a pole")
 
 
-def test_variational_particles_are_refused():
-    sim = pfvi_sim()
+def test_singularity_of_the_four_stage_coefficients_is_refused():
+    # For s = 4 the stage matrix is singular at u = 2.857202... (found by
+    # bisection on rebound_pfvi.stage_coefficients(4, u)["det_ratio"]); s = 3,
+    # 5 and 6 have no singularity in (0, pi).
+    sim = pfvi_sim(4)
+    sim.integrator.frequency = "fixed"
+    sim.integrator.u_max = 3.0
+    sim.integrator.omega = 2.857202 / sim.dt
+    assert_refused(sim, r"particle 0: u = omega\*dt = 2\.8572 is within 0\.001 of a singularity of the 4-stage")
+
+
+def test_variational_particles_are_refused(stages):
+    sim = pfvi_sim(stages)
     sim.add_variation()
     assert_refused(sim, r"variational particles \(N_var = 3\) are not supported")
 

@@ -181,8 +181,8 @@ int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, 
     const double h = r->dt;
     struct pfvi_lobatto* const q = &st->lobatto;
     if (q->s != st->stages){
+        // First step, or stages changed (the predictor checks its own s).
         pfvi_lobatto_compute(st->stages, q);
-        st->predictor_stages = 0;
     }
     const int s = q->s, m = s - 1;
     struct reb_particle* const ps = r->particles;
