@@ -208,7 +208,7 @@ def test_convergence_order_is_2s_minus_2(s, fitting):
 # The oscillator: exact for s = 2, not for s >= 3 (measured-facts.md item 2).
 
 # Relative position error after 1000 steps of u = 0.5 (omega = 1, "fixed"),
-# measured: python -P benchmarks/stages.py --oscillator
+# measured: python -P benchmarks/stages.py oscillator
 OSCILLATOR_PHASE = {3: 2.84e-4, 4: 1.85e-7, 5: 9.45e-11, 6: 3.02e-14}
 OSCILLATOR_NONE = {2: 0.565, 3: 5.33e-3, 4: 6.37e-6, 5: 4.66e-9, 6: 2.41e-12}
 

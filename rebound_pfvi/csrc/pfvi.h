@@ -160,6 +160,8 @@ struct pfvi_state {
 
 // pfvi_fitting.c
 enum pfvi_fit_status { PFVI_FIT_OK = 0, PFVI_FIT_LIMITED = 1, PFVI_FIT_POLE = -1 };
+// |u| = |omega h| above u_max is limited to u_max (omega reduced to match).
+PFVI_INTERNAL enum pfvi_fit_status pfvi_limit_u(double* omega, double h, double u_max, double* u);
 PFVI_INTERNAL enum pfvi_fit_status pfvi_two_point_fit(double omega, double h, double u_max,
         int literal, struct pfvi_two_point* fit);
 PFVI_API void pfvi_seed_coefficients(double u, double c, double out[4]);

@@ -32,15 +32,20 @@ static double sinc(double u, double sin_u){
     return sin_u/u;
 }
 
-enum pfvi_fit_status pfvi_two_point_fit(double omega, double h, double u_max, int literal, struct pfvi_two_point* fit){
-    enum pfvi_fit_status status = PFVI_FIT_OK;
-    double u = omega*h;
+enum pfvi_fit_status pfvi_limit_u(double* omega, double h, double u_max, double* u){
+    *u = (*omega)*h;
     // Written as !(<=) so that a NaN or Inf frequency estimate is limited too.
-    if (!(fabs(u) <= u_max)){
-        u = copysign(u_max, h);
-        omega = u_max/fabs(h);
-        status = PFVI_FIT_LIMITED;
+    if (!(fabs(*u) <= u_max)){
+        *u = copysign(u_max, h);
+        *omega = u_max/fabs(h);
+        return PFVI_FIT_LIMITED;
     }
+    return PFVI_FIT_OK;
+}
+
+enum pfvi_fit_status pfvi_two_point_fit(double omega, double h, double u_max, int literal, struct pfvi_two_point* fit){
+    double u;
+    const enum pfvi_fit_status status = pfvi_limit_u(&omega, h, u_max, &u);
     if (u == 0.){
         // Classical trapezoidal discrete Lagrangian: exactly velocity Verlet.
         *fit = (struct pfvi_two_point){

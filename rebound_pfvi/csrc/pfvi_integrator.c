@@ -86,7 +86,9 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     PFVI_FIELD("Largest |u| = omega*|dt| used in the fitted coefficients; a larger value is "
         "limited to u_max and counted in n_u_limited. Must lie in (0, pi). The two-point "
         "coefficients have a pole at u = pi/2 (and, for 'phase-literal', at pi): a step whose "
-        "u lies within 1e-3 of one is refused. Default 1.0, where tan(u)/u = 1.56.",
+        "u lies within 1e-3 of one is refused. Default 1.0, where tan(u)/u = 1.56. For s >= 3 "
+        "the stage matrix is regular on (0, pi) except for s = 4 at u = 2.857; steps where its "
+        "determinant falls below 1e-3 of its value at u = 0 are refused.",
         REB_DOUBLE, u_max),
     { "", REB_POINTER, "compensation", offsetof(struct pfvi_state, compensation),
         offsetof(struct pfvi_state, N_compensation), sizeof(struct pfvi_compensation), 0 },

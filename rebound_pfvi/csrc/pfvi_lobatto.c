@@ -185,13 +185,8 @@ int pfvi_lobatto_compute(int s, struct pfvi_lobatto* q){
 
 enum pfvi_fit_status pfvi_stage_fit(const struct pfvi_lobatto* q, double omega, double h,
         double u_max, int fitting, struct pfvi_stage_fit* fit){
-    enum pfvi_fit_status status = PFVI_FIT_OK;
-    double u = omega*h;
-    if (!(fabs(u) <= u_max)){
-        u = copysign(u_max, h);
-        omega = u_max/fabs(h);
-        status = PFVI_FIT_LIMITED;
-    }
+    double u;
+    const enum pfvi_fit_status status = pfvi_limit_u(&omega, h, u_max, &u);
     double det;
     stage_fit_at(q, u, fitting == PFVI_FITTING_PHASE, fit, &det);
     fit->omega = (u == 0.) ? 0. : omega;
