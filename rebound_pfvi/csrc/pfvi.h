@@ -187,6 +187,9 @@ PFVI_INTERNAL int pfvi_particle_finite(const struct reb_particle* p);
 
 // pfvi_frequency.c
 PFVI_INTERNAL double pfvi_curvature_frequency(const double v[3], const double a[3]);
+// The omega a step fits particle p to (before limiting): 0 for fitting "none",
+// the field omega for frequency "fixed", else the curvature frequency.
+PFVI_INTERNAL double pfvi_step_frequency(const struct pfvi_state* s, const struct reb_particle* p, const double a[3]);
 
 // pfvi_integrator.c
 extern const struct reb_integrator pfvi_integrator;

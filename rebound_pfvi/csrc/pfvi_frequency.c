@@ -22,3 +22,14 @@ double pfvi_curvature_frequency(const double v[3], const double a[3]){
     // u = omega*h to u_max, which catches both.
     return sqrt(cx*cx + cy*cy + cz*cz) / v2;
 }
+
+double pfvi_step_frequency(const struct pfvi_state* s, const struct reb_particle* p, const double a[3]){
+    if (s->fitting == PFVI_FITTING_NONE){
+        return 0.;
+    }
+    if (s->frequency == PFVI_FREQUENCY_FIXED){
+        return s->omega;
+    }
+    const double v[3] = {p->vx, p->vy, p->vz};
+    return pfvi_curvature_frequency(v, a);
+}

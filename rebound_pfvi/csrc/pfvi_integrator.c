@@ -196,6 +196,17 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_state*
     return 1;
 }
 
+// realloc that keeps the old buffer (and clears *ok) if it fails, so that
+// free() still finds every buffer.
+static void* pfvi_grow(void* buffer, size_t size, int* ok){
+    void* grown = realloc(buffer, size);
+    if (!grown){
+        *ok = 0;
+        return buffer;
+    }
+    return grown;
+}
+
 // Scratch buffers grow only when N does; the hot path allocates nothing.
 static int pfvi_ensure_scratch(struct reb_simulation* r, struct pfvi_state* s, size_t N){
     if (s->N_compensation != N){
@@ -214,33 +225,24 @@ static int pfvi_ensure_scratch(struct reb_simulation* r, struct pfvi_state* s, s
         return 1;
     }
     s->cache_N = 0;
-    struct reb_particle* start = realloc(s->start, N*sizeof(struct reb_particle));
-    if (start) s->start = start;
-    struct pfvi_end_state* end = realloc(s->end, N*sizeof(struct pfvi_end_state));
-    if (end) s->end = end;
-    struct pfvi_two_point* fit = realloc(s->fit, N*sizeof(struct pfvi_two_point));
-    if (fit) s->fit = fit;
-    struct reb_vec3d* v_rotated = realloc(s->v_rotated, N*sizeof(struct reb_vec3d));
-    if (v_rotated) s->v_rotated = v_rotated;
-    struct reb_vec3d* dx = realloc(s->dx, N*sizeof(struct reb_vec3d));
-    if (dx) s->dx = dx;
-    struct reb_vec3d* dv = realloc(s->dv, N*sizeof(struct reb_vec3d));
-    if (dv) s->dv = dv;
-    struct pfvi_stage_fit* stage_fit = realloc(s->stage_fit, N*sizeof(struct pfvi_stage_fit));
-    if (stage_fit) s->stage_fit = stage_fit;
-    double (*stage_a)[PFVI_STAGES_MAX][3] = realloc(s->stage_a, N*sizeof(*stage_a));
-    if (stage_a) s->stage_a = stage_a;
+    int ok = 1;
+    s->start = pfvi_grow(s->start, N*sizeof(*s->start), &ok);
+    s->end = pfvi_grow(s->end, N*sizeof(*s->end), &ok);
+    s->fit = pfvi_grow(s->fit, N*sizeof(*s->fit), &ok);
+    s->v_rotated = pfvi_grow(s->v_rotated, N*sizeof(*s->v_rotated), &ok);
+    s->dx = pfvi_grow(s->dx, N*sizeof(*s->dx), &ok);
+    s->dv = pfvi_grow(s->dv, N*sizeof(*s->dv), &ok);
+    s->stage_fit = pfvi_grow(s->stage_fit, N*sizeof(*s->stage_fit), &ok);
+    s->stage_a = pfvi_grow(s->stage_a, N*sizeof(*s->stage_a), &ok);
+    s->unknowns = pfvi_grow(s->unknowns, N*sizeof(*s->unknowns), &ok);
+    s->unknowns_next = pfvi_grow(s->unknowns_next, N*sizeof(*s->unknowns_next), &ok);
     if (s->predictor_N > N){
         // Only after a Simulationarchive load with fewer particles: the buffer
         // now holds N; an archive must never write more than it holds.
         s->predictor_N = 0;
         s->predictor_stages = 0;
     }
-    double (*unknowns)[PFVI_STAGES_MAX-1][3] = realloc(s->unknowns, N*sizeof(*unknowns));
-    if (unknowns) s->unknowns = unknowns;
-    double (*unknowns_next)[PFVI_STAGES_MAX-1][3] = realloc(s->unknowns_next, N*sizeof(*unknowns_next));
-    if (unknowns_next) s->unknowns_next = unknowns_next;
-    if (!start || !end || !fit || !v_rotated || !dx || !dv || !stage_fit || !stage_a || !unknowns || !unknowns_next){
+    if (!ok){
         pfvi_error(r, "pfvi: could not allocate scratch memory for %zu particles.", N);
         return 0;
     }
@@ -346,16 +348,10 @@ static int pfvi_two_point_step(struct reb_simulation* r, struct pfvi_state* s, s
 
     // Fit every particle before anything is written, so that a refusal is cheap.
     const int literal = (s->fitting == PFVI_FITTING_PHASE_LITERAL);
-    const int fitted = (s->fitting != PFVI_FITTING_NONE);
-    const int fixed = (s->frequency == PFVI_FREQUENCY_FIXED);
     uint64_t n_limited = 0;
     double omega_min = INFINITY, omega_max = 0.;
     for (size_t i=0; i<N; i++){
-        double omega = 0.;
-        if (fitted){
-            const double v[3] = {p0[i].vx, p0[i].vy, p0[i].vz};
-            omega = fixed ? s->omega : pfvi_curvature_frequency(v, e[i].a);
-        }
+        const double omega = pfvi_step_frequency(s, &p0[i], e[i].a);
         const enum pfvi_fit_status status = pfvi_two_point_fit(omega, h, s->u_max, literal, &s->fit[i]);
         if (status == PFVI_FIT_POLE){
             pfvi_roll_back(r, s, N, t0);

@@ -137,7 +137,7 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
 // First iterate of the stage accelerations: the previous step's, extrapolated
 // along their interpolating polynomial to this step's nodes, or the start
 // acceleration at every node.
-static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h, const double (*a_start)[3]){
+static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
     const struct pfvi_lobatto* const q = &st->lobatto;
     const int s = q->s;
     const int extrapolate = st->predictor_stages == s && st->predictor_N == N && st->predictor_t == t0
@@ -164,7 +164,7 @@ static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h, 
         for (int k=0; k<s; k++){
             for (int c=0; c<3; c++){
                 if (k == 0 || !extrapolate){
-                    st->stage_a[i][k][c] = a_start[i][c];
+                    st->stage_a[i][k][c] = st->end[i].a[c];  // the start acceleration
                 }else{
                     double sum = 0.;
                     for (int m=0; m<s; m++){
@@ -191,18 +191,12 @@ int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, 
 
     // Fit every particle before anything is written. Particles sharing u
     // (all of them for "none" or a fixed omega) share the work.
-    const int fitted = (st->fitting != PFVI_FITTING_NONE);
-    const int fixed = (st->frequency == PFVI_FREQUENCY_FIXED);
     uint64_t n_limited = 0;
     double omega_min = INFINITY, omega_max = 0.;
     double omega_last = NAN;
     enum pfvi_fit_status status_last = PFVI_FIT_OK;
     for (size_t i=0; i<N; i++){
-        double omega = 0.;
-        if (fitted){
-            const double v[3] = {p0[i].vx, p0[i].vy, p0[i].vz};
-            omega = fixed ? st->omega : pfvi_curvature_frequency(v, e[i].a);
-        }
+        const double omega = pfvi_step_frequency(st, &p0[i], e[i].a);
         enum pfvi_fit_status status;
         if (i > 0 && omega == omega_last){
             st->stage_fit[i] = st->stage_fit[i-1];
@@ -224,11 +218,7 @@ int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, 
         omega_max = fmax(omega_max, st->stage_fit[i].omega);
     }
 
-    double (*a_start)[3] = (double (*)[3])st->dx;  // scratch: the start accelerations
-    for (size_t i=0; i<N; i++){
-        memcpy(a_start[i], e[i].a, sizeof(a_start[i]));
-    }
-    stage_predict(st, N, t0, h, (const double (*)[3])a_start);
+    stage_predict(st, N, t0, h);
 
     // Fixed-point iteration; `unknowns` is the iterate at which the forces
     // in stage_a were evaluated (after the first round).
