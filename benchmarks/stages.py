@@ -5,6 +5,8 @@ against steps and against wall time, with fixed steps.
     python -P benchmarks/stages.py precision   [--e 0.5] [--orbits 100] [--repeats 3]
     python -P benchmarks/stages.py oscillator
     python -P benchmarks/stages.py predictor
+    python -P benchmarks/stages.py order
+    python -P benchmarks/stages.py reversibility
 
 cost: ns/step, force evaluations and iterations per step for s = 2..6
 (fitting "phase" and "none"), N = 2 (m = 1 and 1e-3, a = 1, e = 0.5, COM
@@ -22,6 +24,15 @@ LEAPFROG sweep steps per orbit; IAS15 sweeps its epsilon.
 oscillator: relative position error after 1000 steps of u = 0.5 on the 2-D
 oscillator (omega = 1, frequency "fixed"), every s and fitting: the values
 asserted in tests/test_stages.py.
+
+order: e = 0.5, one orbit of a test particle around m = 1, every s, "none"
+and "phase": largest energy error and final position error at the step
+counts of tests/test_stages.py, and the slope of the position error between
+them (the order the test asserts).
+
+reversibility: 10 orbits at e = 0.5 (m = 1 and 1e-3, COM frame, 100 steps
+per orbit) and back, with the curvature frequency: the largest difference
+from the start in any coordinate.
 
 predictor: mean iterations per step with the last step's stage accelerations
 extrapolated (default) and without (the predictor cleared before every step).
@@ -166,10 +177,43 @@ def precision(e, orbits, repeats):
         print(f"| {label} | {step} | {energy:.2e} | {position:.2e} | {steps} | {fe} | {wall:.4f} |")
 
 
-def oscillator():
-    import sys
+def tests_path():
     import os
+    import sys
     sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+
+
+def order():
+    tests_path()
+    from test_stages import ORDER_STEPS, kepler_errors
+
+    print("| s | steps/orbit | none: energy, position | phase: energy, position | slope none / phase |")
+    print("|---|---|---|---|---|")
+    for s in STAGES:
+        n1, n2 = ORDER_STEPS[s]
+        cells, slopes = [], []
+        for fitting in ("none", "phase"):
+            coarse, fine = kepler_errors(s, fitting, n1), kepler_errors(s, fitting, n2)
+            cells.append(f"{coarse[0]:.3g}, {coarse[1]:.3g}")
+            slopes.append(math.log(coarse[1] / fine[1]) / math.log(n2 / n1))
+        print(f"| {s} | {n1} | {cells[0]} | {cells[1]} | {slopes[0]:.2f} / {slopes[1]:.2f} |")
+
+
+def reversibility():
+    tests_path()
+    from test_verlet_and_reversibility import round_trip
+
+    print("| s | round trip, curvature frequency |")
+    print("|---|---|")
+    for s in STAGES:
+        sim = two_body(0.5)
+        configure(sim, *pfvi(s, "phase"))
+        sim.dt = 2 * math.pi / 100
+        print(f"| {s} | {round_trip(sim, 1000):.2g} |")
+
+
+def oscillator():
+    tests_path()
     from conftest import harmonic_oscillator, oscillator_exact
 
     print("| s | phase | phase-literal | none |")
@@ -208,7 +252,8 @@ def predictor():
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("what", choices=("cost", "precision", "oscillator", "predictor"))
+    parser.add_argument("what", choices=("cost", "precision", "oscillator", "predictor", "order",
+                                         "reversibility"))
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--e", type=float, default=0.5)
     parser.add_argument("--orbits", type=int, default=100)
@@ -219,6 +264,10 @@ def main():
         precision(args.e, args.orbits, args.repeats)
     elif args.what == "oscillator":
         oscillator()
+    elif args.what == "order":
+        order()
+    elif args.what == "reversibility":
+        reversibility()
     else:
         predictor()
 
