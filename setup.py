@@ -37,7 +37,7 @@ core = Extension(
     "rebound_pfvi._pfvi_core",
     sources=[os.path.join("rebound_pfvi", "csrc", f) for f in
              ("pfvi_integrator.c", "pfvi_fitting.c", "pfvi_frequency.c", "pfvi_lobatto.c",
-              "pfvi_stages.c")],
+              "pfvi_stages.c", "pfvi_control.c")],
     libraries=["m"],
     extra_compile_args=["-std=c99", "-O3", "-fvisibility=hidden", "-Wall", "-Wextra",
                         "-D_GNU_SOURCE", "-fno-math-errno"],

@@ -64,7 +64,7 @@ def configure(sim, integrator, fields):
 
 
 def pfvi(s, fitting):
-    return "pfvi", {"stages": s, "fitting": fitting}
+    return "pfvi", {"stages": s, "fitting": fitting, "epsilon": 0.}  # fixed steps
 
 
 def cost(repeats):

@@ -39,8 +39,8 @@ def star_and_50_planets():
 
 
 SETTINGS = {
-    "pfvi phase": ("pfvi", {"fitting": "phase"}),
-    "pfvi none": ("pfvi", {"fitting": "none"}),
+    "pfvi phase": ("pfvi", {"fitting": "phase", "epsilon": 0.}),
+    "pfvi none": ("pfvi", {"fitting": "none", "epsilon": 0.}),
     "leapfrog": ("leapfrog", {}),
     "whfast": ("whfast", {}),
     "ias15": ("ias15", {}),

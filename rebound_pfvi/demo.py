@@ -40,6 +40,7 @@ def exact_relative_position(sim0, t):
 def configure(sim, name, period, steps_per_orbit):
     if name.startswith("pfvi"):
         sim.integrator = "pfvi"
+        sim.integrator.epsilon = 0.  # fixed steps of dt
         sim.integrator.fitting = name.split(":")[1]
         sim.dt = period / steps_per_orbit
     elif name == "whfast":

@@ -39,6 +39,7 @@ def pfvi_step(q0, v0, h, omega, force, fitting):
 
     sim.additional_forces = add_force
     sim.integrator = "pfvi"
+    sim.integrator.epsilon = 0.  # fixed steps of dt
     sim.integrator.fitting = fitting
     sim.integrator.frequency = "fixed"
     sim.integrator.omega = omega

@@ -29,6 +29,7 @@ def test_test_particles_follow_rebound_semantics(testparticle_type):
         sim = planet_and_test_particle(testparticle_type)
         sim.integrator = integrator
         if integrator == "pfvi":
+            sim.integrator.epsilon = 0.  # fixed steps of dt
             sim.integrator.fitting = "none"
         sim.dt = 1e-3
         sim.integrate(1.0)
@@ -38,6 +39,7 @@ def test_test_particles_follow_rebound_semantics(testparticle_type):
     assert moved_by_test_particle < 1e-8
     ref = planet_and_test_particle(1 - testparticle_type)
     ref.integrator = "pfvi"
+    ref.integrator.epsilon = 0.  # fixed steps of dt
     ref.integrator.fitting = "none"
     ref.dt = 1e-3
     ref.integrate(1.0)
@@ -60,6 +62,7 @@ def test_velocity_dependent_force_converges_at_second_order():
         sim.additional_forces = drag
         sim.force_is_velocity_dependent = 1
         sim.integrator = "pfvi"
+        sim.integrator.epsilon = 0.  # fixed steps of dt
         sim.dt = h
         sim.integrate(2.0)
         return abs(sim.particles[0].vx - math.exp(-1.4)), sim.integrator.n_force_evaluations
@@ -75,6 +78,7 @@ def test_direct_gravity_modes(gravity):
     sim = two_body(1e-3, e=0.3, com=True)
     sim.gravity = gravity
     sim.integrator = "pfvi"
+    sim.integrator.epsilon = 0.  # fixed steps of dt
     sim.dt = 1e-3
     E0 = sim.energy()
     sim.integrate(2 * math.pi)
@@ -94,6 +98,7 @@ def damped_oscillator_error(s, h, T=4.0):
     sim.additional_forces = force
     sim.force_is_velocity_dependent = 1
     sim.integrator = "pfvi"
+    sim.integrator.epsilon = 0.  # fixed steps of dt
     sim.integrator.stages = s
     sim.integrator.fitting = "none"
     sim.dt = h

@@ -90,6 +90,7 @@ def anharmonic_sim(s, fitting, omega, q0, v0):
 
     sim.additional_forces = force
     sim.integrator = "pfvi"
+    sim.integrator.epsilon = 0.  # fixed steps of dt
     sim.integrator.stages = s
     sim.integrator.fitting = fitting
     sim.integrator.frequency = "fixed"
@@ -168,6 +169,7 @@ def kepler_errors(s, fitting, n):
     sim = two_body(0.0, e=0.5, com=False)
     orbit = sim.particles[1].orbit(primary=sim.particles[0])
     sim.integrator = "pfvi"
+    sim.integrator.epsilon = 0.  # fixed steps of dt
     sim.integrator.stages = s
     sim.integrator.fitting = fitting
     sim.dt = orbit.P / n
@@ -241,6 +243,7 @@ def star_planet(s, e, steps_per_orbit):
     """m = 1 and 1e-3, a = 1, COM frame, pfvi with s stages."""
     sim = two_body(1e-3, e=e, com=True)
     sim.integrator = "pfvi"
+    sim.integrator.epsilon = 0.  # fixed steps of dt
     sim.integrator.stages = s
     sim.dt = 2 * math.pi / steps_per_orbit
     return sim
@@ -260,6 +263,7 @@ def test_force_evaluations_are_s_minus_1_per_iteration(s):
 def test_two_point_steps_count_one_iteration_each():
     sim = two_body(1e-3, e=0.5, com=True)
     sim.integrator = "pfvi"
+    sim.integrator.epsilon = 0.  # fixed steps of dt
     sim.dt = 0.01
     sim.steps(10)
     assert sim.integrator.n_iterations == 10 and sim.integrator.iterations_max == 1
@@ -279,6 +283,7 @@ def test_non_finite_force_at_a_stage_point_leaves_the_state_untouched(s):
     sim = two_body(1e-3, e=0.3, com=True)
     sim.additional_forces = nan_at_interior_stage
     sim.integrator = "pfvi"
+    sim.integrator.epsilon = 0.  # fixed steps of dt
     sim.integrator.stages = s
     sim.dt = 0.1
     sim.steps(5)

@@ -35,11 +35,31 @@
 // is accepted as converged to round-off (larger: the step is refused).
 #define PFVI_STAGE_MAX_ITERATIONS 50
 #define PFVI_STAGE_TOLERANCE 1e-12
+// Step control (seed section 4, pfvi_control.c).
+#define PFVI_EPSILON_DEFAULT 1e-6
+// Standard controller: next h = h * SAFETY * (epsilon/error)^(1/ORDER), the
+// factor kept within [SHRINK_MIN, GROW_MAX]; ORDER is the measured order in h
+// of the osculating-circle estimate (docs/adaptive.md).
+#define PFVI_CONTROL_SAFETY 0.9
+#define PFVI_CONTROL_ORDER 3.
+#define PFVI_CONTROL_GROW_MAX 2.
+#define PFVI_CONTROL_SHRINK_MIN 0.1
+// Consecutive rejections of one step after which it is given up.
+#define PFVI_CONTROL_MAX_REJECTIONS 60
+// The reversible step: trial steps per step at most, and the relative change
+// of h and of the fitted frequencies at which the step equation counts as solved.
+#define PFVI_REVERSIBLE_MAX_TRIALS 12
+#define PFVI_REVERSIBLE_TOLERANCE 1e-10
 
 enum pfvi_fitting {
     PFVI_FITTING_PHASE = 0,          // seed's Ld divided by gamma(u): exact q and p on the oscillator
     PFVI_FITTING_PHASE_LITERAL = 1,  // seed's Ld exactly as printed: momenta scaled by gamma(u)
     PFVI_FITTING_NONE = 2,           // classical Marsden-West trapezoidal Ld (velocity Verlet)
+};
+
+enum pfvi_step_control {
+    PFVI_STEP_CONTROL_SEED = 0,       // accept if the estimate <= epsilon, propose the next h (seed section 4)
+    PFVI_STEP_CONTROL_REVERSIBLE = 1, // h solves estimate(y_n, y_n+1) = epsilon: symmetric in the two ends
 };
 
 enum pfvi_frequency {
@@ -102,6 +122,16 @@ struct pfvi_end_state {
     double a[3];
 };
 
+// The osculating circle of one particle at one point of its path: radius R
+// and centre O = x + offset (seed section 4). defined = 0 on a straight line
+// or at rest, where the curvature vanishes.
+struct pfvi_osculating {
+    double R;
+    double offset[3];
+    double omega;        // |v x a| / |v|^2, the curvature frequency
+    int defined;
+};
+
 struct pfvi_compensation {
     double x[3];
     double v[3];
@@ -116,6 +146,8 @@ struct pfvi_state {
     int stages;
     double omega;
     double u_max;
+    double epsilon;
+    int step_control;
     // Statistics
     uint64_t n_steps;
     uint64_t n_iterations;
@@ -125,6 +157,11 @@ struct pfvi_state {
     uint64_t n_force_evaluations;
     double omega_min;
     double omega_max;
+    uint64_t n_rejected;
+    uint64_t n_attempts;
+    double error_estimate;         // the step control's estimate for the last step taken
+    // Controller state (saved): the last solution of the reversible step equation.
+    double dt_reversible;
     // Scratch
     size_t N_allocated;
     struct reb_particle* start;    // bit-exact copy of the particles at the start of the step (rollback)
@@ -138,17 +175,31 @@ struct pfvi_state {
     // continued run stays bit-identical.
     struct pfvi_compensation* compensation;
     size_t N_compensation;
+    // Step control: the frequency each particle is fitted to in this step,
+    // the curvature frequency at its end (the controller's u bound), and
+    // the osculating circles at its start.
+    double* omega_fit;
+    double* omega_end;
+    struct pfvi_osculating* osculating_start;
+    // What a trial step found, committed only if the step is taken.
+    uint64_t trial_n_limited;
+    uint64_t trial_rounds;
+    double trial_change;           // the stage solve's last relative change
+    double trial_omega_min;
+    double trial_omega_max;
     // The s-stage solve (stages >= 3): quadrature, per-particle fits, stage
-    // accelerations a[i][k] (also the predictor's data: the last step's), and
-    // the unknowns of the current and the next iterate.
+    // accelerations a[i][k] of the step being tried, those of the last step
+    // taken (the predictor's data), and the unknowns of the current and the
+    // next iterate.
     struct pfvi_lobatto lobatto;
     struct pfvi_stage_fit* stage_fit;
     double (*stage_a)[PFVI_STAGES_MAX][3];
+    double (*predictor_a)[PFVI_STAGES_MAX][3];
     double (*unknowns)[PFVI_STAGES_MAX-1][3];
     double (*unknowns_next)[PFVI_STAGES_MAX-1][3];
     // The last step's stage accelerations seed the next solve if it starts
     // where that step ended (same s, N and t). Saved in Simulationarchives
-    // with stage_a, so that a continued run is bit-identical.
+    // with predictor_a, so that a continued run is bit-identical.
     int predictor_stages;          // s of that step (0: none)
     size_t predictor_N;
     double predictor_h;
@@ -176,8 +227,31 @@ PFVI_API int pfvi_lobatto_table(int s, double* c, double* w, double* a);
 PFVI_API double pfvi_gamma_stages(int s, double u);
 PFVI_API int pfvi_stage_coefficients(int s, double u, double* out);
 
+// Outcome of one trial step. A trial leaves the end state in the particles
+// and commits nothing; on anything but PFVI_TRIAL_OK the particles and t are
+// already rolled back.
+enum pfvi_trial {
+    PFVI_TRIAL_OK = 1,
+    PFVI_TRIAL_ERROR = 0,            // refused, error reported
+    PFVI_TRIAL_NOT_CONVERGED = -1,   // the stage solve did not converge; no error reported
+};
+
 // pfvi_stages.c
-PFVI_INTERNAL int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0);
+PFVI_INTERNAL enum pfvi_trial pfvi_stages_trial(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0, double h);
+PFVI_INTERNAL void pfvi_stages_commit(struct reb_simulation* r, struct pfvi_state* s, size_t N, double h);
+
+// pfvi_control.c
+PFVI_INTERNAL void pfvi_osculating_circle(const double v[3], const double a[3], struct pfvi_osculating* c);
+// The seed's bound | |R1 - R2| - |O1 - O2| | on the position error of particle
+// i's step, relative to min(R1, R2), less its round-off level (never < 0).
+PFVI_INTERNAL double pfvi_osculating_error(const struct reb_particle* p0, const struct pfvi_osculating* c0,
+        const struct reb_particle* p1, const struct pfvi_osculating* c1);
+// Takes one step with the controller of s->step_control; returns the h taken,
+// or 0 (rolled back, error reported) if none could be.
+PFVI_INTERNAL double pfvi_controlled_step(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0);
+// pfvi_integrator.c: one trial step of either scheme, and its commit.
+PFVI_INTERNAL enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0, double h);
+PFVI_INTERNAL void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* s, size_t N, double h);
 
 // pfvi_integrator.c, shared with pfvi_stages.c
 PFVI_INTERNAL void pfvi_error(struct reb_simulation* r, const char* fmt, ...) __attribute__((format(printf, 2, 3)));

@@ -55,6 +55,12 @@ static struct reb_binarydata_enum_descriptor pfvi_fitting_enum[] = {
     { 0 },
 };
 
+static struct reb_binarydata_enum_descriptor pfvi_step_control_enum[] = {
+    { PFVI_STEP_CONTROL_SEED, "seed" },
+    { PFVI_STEP_CONTROL_REVERSIBLE, "reversible" },
+    { 0 },
+};
+
 static struct reb_binarydata_enum_descriptor pfvi_frequency_enum[] = {
     { PFVI_FREQUENCY_CURVATURE, "curvature" },
     { PFVI_FREQUENCY_FIXED, "fixed" },
@@ -90,10 +96,26 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "the stage matrix is regular on (0, pi) except for s = 4 at u = 2.857; steps where its "
         "determinant falls below 1e-3 of its value at u = 0 are refused.",
         REB_DOUBLE, u_max),
+    PFVI_FIELD("Tolerance of the adaptive step control (seed section 4): the bound "
+        "| |R1 - R2| - |O1 - O2| | on a step's position error from the osculating circles "
+        "(radius R, centre O) at its two ends, relative to the smaller radius, for the particle "
+        "where it is largest. 0: fixed steps of sim.dt. Default 1e-6 (docs/adaptive.md). The "
+        "step is also kept at u = omega*|dt| <= u_max. sim.dt is the first step tried and, "
+        "after each step, the next one proposed, as with IAS15.",
+        REB_DOUBLE, epsilon),
+    { "Step selection when epsilon > 0. 'seed' (default): a step is accepted if the estimate "
+      "is at most epsilon, otherwise retried shorter (counted in n_rejected, nothing changed); "
+      "the next step is h*0.9*(epsilon/estimate)^(1/3), at most 2x and at least 0.1x larger. "
+      "'reversible': each step solves estimate(start, end) = epsilon (or u = u_max) for h, and "
+      "is fitted to the mean of the curvature frequencies at its two ends, so the step chosen "
+      "from either end is the same: time-symmetric, as in Hut, Makino & McMillan 1995 (ApJ 443, "
+      "L93). It costs about 2 to 4 trial steps per step (n_attempts).",
+      REB_INT, "step_control", offsetof(struct pfvi_state, step_control), 0, 0, pfvi_step_control_enum },
     { "", REB_POINTER, "compensation", offsetof(struct pfvi_state, compensation),
         offsetof(struct pfvi_state, N_compensation), sizeof(struct pfvi_compensation), 0 },
-    { "", REB_POINTER, "stage_accelerations", offsetof(struct pfvi_state, stage_a),
-        offsetof(struct pfvi_state, predictor_N), sizeof(*((struct pfvi_state*)0)->stage_a), 0 },
+    { "", REB_POINTER, "stage_accelerations", offsetof(struct pfvi_state, predictor_a),
+        offsetof(struct pfvi_state, predictor_N), sizeof(*((struct pfvi_state*)0)->predictor_a), 0 },
+    { "", REB_DOUBLE, "dt_reversible", offsetof(struct pfvi_state, dt_reversible), 0, 0, 0 },
     { "", REB_INT, "predictor_stages", offsetof(struct pfvi_state, predictor_stages), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_h", offsetof(struct pfvi_state, predictor_h), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_t", offsetof(struct pfvi_state, predictor_t), 0, 0, 0 },
@@ -108,6 +130,12 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         REB_UINT64, iterations_max),
     PFVI_FIELD("Statistic: n_iterations / n_steps.",
         REB_DOUBLE, iterations_mean),
+    PFVI_FIELD("Statistic: steps tried and rejected by the step control (or whose stage "
+        "solve did not converge and was retried shorter).", REB_UINT64, n_rejected),
+    PFVI_FIELD("Statistic: trial steps, taken or not (the work done: n_attempts / n_steps per step).",
+        REB_UINT64, n_attempts),
+    PFVI_FIELD("Statistic: the step control's error estimate for the last step taken "
+        "(0 with fixed steps).", REB_DOUBLE, error_estimate),
     PFVI_FIELD("Statistic: smallest omega used in the last step (after limiting).",
         REB_DOUBLE, omega_min),
     PFVI_FIELD("Statistic: largest omega used in the last step (after limiting).",
@@ -125,6 +153,8 @@ static void* pfvi_create(void){
     s->stages = 2;
     s->omega = 0.;
     s->u_max = PFVI_U_MAX_DEFAULT;
+    s->epsilon = PFVI_EPSILON_DEFAULT;
+    s->step_control = PFVI_STEP_CONTROL_SEED;
     return s;
 }
 
@@ -142,6 +172,10 @@ static void pfvi_free(void* state){
     free(s->compensation);
     free(s->stage_fit);
     free(s->stage_a);
+    free(s->predictor_a);
+    free(s->omega_fit);
+    free(s->omega_end);
+    free(s->osculating_start);
     free(s->unknowns);
     free(s->unknowns_next);
     free(s);
@@ -179,6 +213,14 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_state*
     }
     if (!(s->u_max > 0. && s->u_max < M_PI)){
         pfvi_error(r, "pfvi: integrator.u_max = %g is not valid; it must lie in (0, pi).", s->u_max);
+        return 0;
+    }
+    if (!(isfinite(s->epsilon) && s->epsilon >= 0.)){
+        pfvi_error(r, "pfvi: integrator.epsilon = %g is not valid; it must be finite and >= 0 (0: fixed steps of sim.dt).", s->epsilon);
+        return 0;
+    }
+    if (s->step_control != PFVI_STEP_CONTROL_SEED && s->step_control != PFVI_STEP_CONTROL_REVERSIBLE){
+        pfvi_error(r, "pfvi: integrator.step_control = %d is not valid; allowed: 'seed', 'reversible'.", s->step_control);
         return 0;
     }
     if (!(isfinite(r->dt) && r->dt != 0.)){
@@ -234,6 +276,10 @@ static int pfvi_ensure_scratch(struct reb_simulation* r, struct pfvi_state* s, s
     s->dv = pfvi_grow(s->dv, N*sizeof(*s->dv), &ok);
     s->stage_fit = pfvi_grow(s->stage_fit, N*sizeof(*s->stage_fit), &ok);
     s->stage_a = pfvi_grow(s->stage_a, N*sizeof(*s->stage_a), &ok);
+    s->predictor_a = pfvi_grow(s->predictor_a, N*sizeof(*s->predictor_a), &ok);
+    s->omega_fit = pfvi_grow(s->omega_fit, N*sizeof(*s->omega_fit), &ok);
+    s->omega_end = pfvi_grow(s->omega_end, N*sizeof(*s->omega_end), &ok);
+    s->osculating_start = pfvi_grow(s->osculating_start, N*sizeof(*s->osculating_start), &ok);
     s->unknowns = pfvi_grow(s->unknowns, N*sizeof(*s->unknowns), &ok);
     s->unknowns_next = pfvi_grow(s->unknowns_next, N*sizeof(*s->unknowns_next), &ok);
     if (s->predictor_N > N){
@@ -339,9 +385,8 @@ static int pfvi_final_kick_velocity_dependent(struct reb_simulation* r, struct p
 }
 
 // The two-point step (stages = 2): explicit, with the closed form of
-// pfvi_fitting.c. Returns 0, rolled back with an error, if it is refused.
-static int pfvi_two_point_step(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0){
-    const double h = r->dt;
+// pfvi_fitting.c. Commits nothing: see pfvi_two_point_commit.
+static enum pfvi_trial pfvi_two_point_trial(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0, double h){
     struct reb_particle* const ps = r->particles;
     struct reb_particle* const p0 = s->start;
     struct pfvi_end_state* const e = s->end;
@@ -351,14 +396,14 @@ static int pfvi_two_point_step(struct reb_simulation* r, struct pfvi_state* s, s
     uint64_t n_limited = 0;
     double omega_min = INFINITY, omega_max = 0.;
     for (size_t i=0; i<N; i++){
-        const double omega = pfvi_step_frequency(s, &p0[i], e[i].a);
+        const double omega = s->omega_fit[i];
         const enum pfvi_fit_status status = pfvi_two_point_fit(omega, h, s->u_max, literal, &s->fit[i]);
         if (status == PFVI_FIT_POLE){
             pfvi_roll_back(r, s, N, t0);
             pfvi_error(r, "pfvi: particle %zu: u = omega*dt = %.6g is within %g of a pole of the two-point "
                     "coefficients (cos u = 0 or sin u = 0); step not taken. Lower u_max or dt.",
                     i, omega*h, PFVI_POLE_GUARD);
-            return 0;
+            return PFVI_TRIAL_ERROR;
         }
         n_limited += (status == PFVI_FIT_LIMITED);
         omega_min = (s->fit[i].omega < omega_min) ? s->fit[i].omega : omega_min;
@@ -410,7 +455,7 @@ static int pfvi_two_point_step(struct reb_simulation* r, struct pfvi_state* s, s
 
     r->t = t0 + h;
     if (!pfvi_update_acceleration(r, s, N, t0)){
-        return 0;
+        return PFVI_TRIAL_ERROR;
     }
     // Final kick; implicit only if the force depends on velocities.
     if (r->force_is_velocity_dependent){
@@ -418,7 +463,7 @@ static int pfvi_two_point_step(struct reb_simulation* r, struct pfvi_state* s, s
             s->v_rotated[i] = (struct reb_vec3d){ps[i].vx, ps[i].vy, ps[i].vz};
         }
         if (!pfvi_final_kick_velocity_dependent(r, s, N, t0)){
-            return 0;
+            return PFVI_TRIAL_ERROR;
         }
     }
     for (size_t i=0; i<N; i++){
@@ -445,11 +490,21 @@ static int pfvi_two_point_step(struct reb_simulation* r, struct pfvi_state* s, s
         if (!pfvi_particle_finite(&ps[i])){
             pfvi_roll_back(r, s, N, t0);
             pfvi_error(r, "pfvi: particle %zu became non-finite in the step from t = %.17g; step not taken, state restored.", i, t0);
-            return 0;
+            return PFVI_TRIAL_ERROR;
         }
     }
+    s->trial_n_limited = n_limited;
+    s->trial_omega_min = omega_min;
+    s->trial_omega_max = omega_max;
+    s->trial_rounds = 1;
+    return PFVI_TRIAL_OK;
+}
 
-    // The step is taken: keep what the sums of x and v lost.
+// The step is taken: keep what the sums of x and v lost.
+static void pfvi_two_point_commit(struct reb_simulation* r, struct pfvi_state* s, size_t N){
+    const struct reb_particle* const ps = r->particles;
+    const struct reb_particle* const p0 = s->start;
+    const int compensated = (s->fitting != PFVI_FITTING_PHASE_LITERAL);
     for (size_t i=0; i<N; i++){
         struct pfvi_compensation* const comp = &s->compensation[i];
         if (compensated && s->fit[i].keep == 1.){
@@ -466,10 +521,22 @@ static int pfvi_two_point_step(struct reb_simulation* r, struct pfvi_state* s, s
     s->n_iterations++;
     s->iterations_max = (s->iterations_max < 1) ? 1 : s->iterations_max;
     s->predictor_stages = 0;
-    s->n_u_limited += n_limited;
-    s->omega_min = omega_min;
-    s->omega_max = omega_max;
-    return 1;
+}
+
+enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0, double h){
+    s->n_attempts++;
+    return (s->stages == 2) ? pfvi_two_point_trial(r, s, N, t0, h) : pfvi_stages_trial(r, s, N, t0, h);
+}
+
+void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* s, size_t N, double h){
+    if (s->stages == 2){
+        pfvi_two_point_commit(r, s, N);
+    }else{
+        pfvi_stages_commit(r, s, N, h);
+    }
+    s->n_u_limited += s->trial_n_limited;
+    s->omega_min = s->trial_omega_min;
+    s->omega_max = s->trial_omega_max;
 }
 
 static void pfvi_step(struct reb_simulation* r, void* state){
@@ -481,12 +548,11 @@ static void pfvi_step(struct reb_simulation* r, void* state){
     if (!pfvi_options_valid(r, s)){
         return;
     }
-    const double h = r->dt;
     const double t0 = r->t;
     const size_t N = r->N;
     if (N == 0){
-        r->t = t0 + h;
-        r->dt_last_done = h;
+        r->t = t0 + r->dt;
+        r->dt_last_done = r->dt;
         s->n_steps++;
         return;
     }
@@ -521,11 +587,28 @@ static void pfvi_step(struct reb_simulation* r, void* state){
             e[i].a[0] = ps[i].ax; e[i].a[1] = ps[i].ay; e[i].a[2] = ps[i].az;
         }
     }
+    for (size_t i=0; i<N; i++){
+        s->omega_fit[i] = pfvi_step_frequency(s, &p0[i], e[i].a);
+    }
 
-    const int taken = (s->stages == 2) ? pfvi_two_point_step(r, s, N, t0)
-                                       : pfvi_stages_step(r, s, N, t0);
-    if (!taken){
-        return;
+    double h;
+    if (s->epsilon == 0.){
+        h = r->dt;
+        const enum pfvi_trial trial = pfvi_trial_step(r, s, N, t0, h);
+        if (trial == PFVI_TRIAL_NOT_CONVERGED){
+            pfvi_error(r, "pfvi: the %d-stage solve did not converge (relative change %.3g after %d iterations) "
+                    "in the step from t = %.17g; step not taken, state restored. Lower dt.",
+                    s->stages, s->trial_change, (int)s->trial_rounds, t0);
+        }
+        if (trial != PFVI_TRIAL_OK){
+            return;
+        }
+        pfvi_commit_step(r, s, N, h);
+    }else{
+        h = pfvi_controlled_step(r, s, N, t0);
+        if (h == 0.){
+            return;
+        }
     }
     r->dt_last_done = h;
     s->n_steps++;

@@ -159,8 +159,6 @@ static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
         }
     }
     for (size_t i=0; i<N; i++){
-        double previous[PFVI_STAGES_MAX][3];
-        memcpy(previous, st->stage_a[i], sizeof(previous));
         for (int k=0; k<s; k++){
             for (int c=0; c<3; c++){
                 if (k == 0 || !extrapolate){
@@ -168,7 +166,7 @@ static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
                 }else{
                     double sum = 0.;
                     for (int m=0; m<s; m++){
-                        sum += x[k][m]*previous[m][c];
+                        sum += x[k][m]*st->predictor_a[i][m][c];
                     }
                     st->stage_a[i][k][c] = sum;
                 }
@@ -177,8 +175,7 @@ static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
     }
 }
 
-int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
-    const double h = r->dt;
+enum pfvi_trial pfvi_stages_trial(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){
     struct pfvi_lobatto* const q = &st->lobatto;
     if (q->s != st->stages){
         // First step, or stages changed (the predictor checks its own s).
@@ -187,7 +184,6 @@ int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, 
     const int s = q->s, m = s - 1;
     struct reb_particle* const ps = r->particles;
     struct reb_particle* const p0 = st->start;
-    const struct pfvi_end_state* const e = st->end;
 
     // Fit every particle before anything is written. Particles sharing u
     // (all of them for "none" or a fixed omega) share the work.
@@ -196,7 +192,7 @@ int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, 
     double omega_last = NAN;
     enum pfvi_fit_status status_last = PFVI_FIT_OK;
     for (size_t i=0; i<N; i++){
-        const double omega = pfvi_step_frequency(st, &p0[i], e[i].a);
+        const double omega = st->omega_fit[i];
         enum pfvi_fit_status status;
         if (i > 0 && omega == omega_last){
             st->stage_fit[i] = st->stage_fit[i-1];
@@ -211,7 +207,7 @@ int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, 
             pfvi_error(r, "pfvi: particle %zu: u = omega*dt = %.6g is within %g of a singularity of the "
                     "%d-stage fitted coefficients; step not taken. Lower u_max or dt.",
                     i, omega*h, PFVI_POLE_GUARD, s);
-            return 0;
+            return PFVI_TRIAL_ERROR;
         }
         n_limited += (status == PFVI_FIT_LIMITED);
         omega_min = fmin(omega_min, st->stage_fit[i].omega);
@@ -264,20 +260,16 @@ int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, 
         st->unknowns = st->unknowns_next;
         st->unknowns_next = swap;
         if (!stage_forces(r, st, N, t0, h)){
-            st->predictor_stages = 0;
-            return 0;
+            return PFVI_TRIAL_ERROR;
         }
         rounds++;
         previous = (iteration == 0) ? INFINITY : change;
     }
-    st->n_iterations += rounds;
-    st->iterations_max = (rounds > (int)st->iterations_max) ? (uint64_t)rounds : st->iterations_max;
+    st->trial_rounds = (uint64_t)rounds;
+    st->trial_change = change;
     if (!converged){
         pfvi_roll_back(r, st, N, t0);
-        st->predictor_stages = 0;
-        pfvi_error(r, "pfvi: the %d-stage solve did not converge (relative change %.3g after %d iterations) "
-                "in the step from t = %.17g; step not taken, state restored. Lower dt.", s, change, rounds, t0);
-        return 0;
+        return PFVI_TRIAL_NOT_CONVERGED;
     }
 
     // p_k+1 from the converged stages; x and v advance by compensated increments.
@@ -313,11 +305,21 @@ int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, 
     for (size_t i=0; i<N; i++){
         if (!pfvi_particle_finite(&ps[i])){
             pfvi_roll_back(r, st, N, t0);
-            st->predictor_stages = 0;
             pfvi_error(r, "pfvi: particle %zu became non-finite in the step from t = %.17g; step not taken, state restored.", i, t0);
-            return 0;
+            return PFVI_TRIAL_ERROR;
         }
     }
+    st->trial_n_limited = n_limited;
+    st->trial_omega_min = omega_min;
+    st->trial_omega_max = omega_max;
+    return PFVI_TRIAL_OK;
+}
+
+// The step is taken: keep what the sums of x and v lost, and this step's
+// stage accelerations for the next step's predictor.
+void pfvi_stages_commit(struct reb_simulation* r, struct pfvi_state* st, size_t N, double h){
+    const struct reb_particle* const ps = r->particles;
+    const struct reb_particle* const p0 = st->start;
     for (size_t i=0; i<N; i++){
         struct pfvi_compensation* const comp = &st->compensation[i];
         const double (*y)[3] = st->unknowns[i];
@@ -328,12 +330,14 @@ int pfvi_stages_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, 
         comp->v[1] = st->dv[i].y - (ps[i].vy - p0[i].vy);
         comp->v[2] = st->dv[i].z - (ps[i].vz - p0[i].vz);
     }
-    st->predictor_stages = s;
+    double (*swap)[PFVI_STAGES_MAX][3] = st->predictor_a;
+    st->predictor_a = st->stage_a;
+    st->stage_a = swap;
+    st->predictor_stages = st->lobatto.s;
     st->predictor_N = N;
     st->predictor_h = h;
     st->predictor_t = r->t;
-    st->n_u_limited += n_limited;
-    st->omega_min = omega_min;
-    st->omega_max = omega_max;
-    return 1;
+    const uint64_t rounds = st->trial_rounds;
+    st->n_iterations += rounds;
+    st->iterations_max = (rounds > st->iterations_max) ? rounds : st->iterations_max;
 }
