@@ -48,7 +48,7 @@
 #define PFVI_CONTROL_MAX_REJECTIONS 60
 // The reversible step: trial steps per step at most, and the relative change
 // of h and of the fitted frequencies at which the step equation counts as solved.
-#define PFVI_REVERSIBLE_MAX_TRIALS 12
+#define PFVI_REVERSIBLE_MAX_TRIALS 40
 #define PFVI_REVERSIBLE_TOLERANCE 1e-10
 
 enum pfvi_fitting {
@@ -159,6 +159,7 @@ struct pfvi_state {
     double omega_max;
     uint64_t n_rejected;
     uint64_t n_attempts;
+    uint64_t n_asymmetric;
     double error_estimate;         // the step control's estimate for the last step taken
     // Controller state (saved): the last solution of the reversible step equation.
     double dt_reversible;
@@ -243,9 +244,9 @@ PFVI_INTERNAL void pfvi_stages_commit(struct reb_simulation* r, struct pfvi_stat
 // pfvi_control.c
 PFVI_INTERNAL void pfvi_osculating_circle(const double v[3], const double a[3], struct pfvi_osculating* c);
 // The seed's bound | |R1 - R2| - |O1 - O2| | on the position error of particle
-// i's step, relative to min(R1, R2), less its round-off level (never < 0).
+// i's step, relative to min(R1, R2), less its round-off level *noise (never < 0).
 PFVI_INTERNAL double pfvi_osculating_error(const struct reb_particle* p0, const struct pfvi_osculating* c0,
-        const struct reb_particle* p1, const struct pfvi_osculating* c1);
+        const struct reb_particle* p1, const struct pfvi_osculating* c1, double* noise);
 // Takes one step with the controller of s->step_control; returns the h taken,
 // or 0 (rolled back, error reported) if none could be.
 PFVI_INTERNAL double pfvi_controlled_step(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0);

@@ -55,7 +55,8 @@ void pfvi_osculating_circle(const double v[3], const double a[3], struct pfvi_os
 }
 
 double pfvi_osculating_error(const struct reb_particle* p0, const struct pfvi_osculating* c0,
-        const struct reb_particle* p1, const struct pfvi_osculating* c1){
+        const struct reb_particle* p1, const struct pfvi_osculating* c1, double* noise_out){
+    *noise_out = 0.;
     if (!c0->defined || !c1->defined){
         return 0.;
     }
@@ -73,6 +74,7 @@ double pfvi_osculating_error(const struct reb_particle* p0, const struct pfvi_os
     const double size = fmax(fmax(fabs(p0->x), fabs(p1->x)), fmax(fmax(fabs(p0->y), fabs(p1->y)),
                 fmax(fabs(p0->z), fabs(p1->z))));
     const double noise = 8.*DBL_EPSILON*(size + r_max)/r_min;
+    *noise_out = noise;
     return (estimate > noise) ? estimate - noise : 0.;
 }
 
@@ -86,6 +88,7 @@ static double control_omega(const struct pfvi_state* s, const struct pfvi_oscula
 // end (seed) or averaged over the ends (reversible). Fills omega_end.
 struct control_view {
     double error;
+    double noise;          // round-off level of the largest estimate
     int informed;
     double omega_end_max;
     double omega_mean_max;
@@ -93,7 +96,7 @@ struct control_view {
 
 static struct control_view control_look(const struct reb_simulation* r, struct pfvi_state* s, size_t N){
     const struct reb_particle* const ps = r->particles;
-    struct control_view view = {0., 0, 0., 0.};
+    struct control_view view = {0., 0., 0, 0., 0.};
     for (size_t i=0; i<N; i++){
         const double v[3] = {ps[i].vx, ps[i].vy, ps[i].vz};
         const double a[3] = {ps[i].ax, ps[i].ay, ps[i].az};
@@ -101,7 +104,12 @@ static struct control_view control_look(const struct reb_simulation* r, struct p
         pfvi_osculating_circle(v, a, &c1);
         const struct pfvi_osculating* const c0 = &s->osculating_start[i];
         view.informed |= (c0->defined && c1.defined);
-        view.error = fmax(view.error, pfvi_osculating_error(&s->start[i], c0, &ps[i], &c1));
+        double noise;
+        const double error = pfvi_osculating_error(&s->start[i], c0, &ps[i], &c1, &noise);
+        if (error > view.error){
+            view.error = error;
+            view.noise = noise;
+        }
         s->omega_end[i] = c1.omega;
         const double w1 = control_omega(s, &c1);
         view.omega_end_max = fmax(view.omega_end_max, w1);
@@ -131,7 +139,7 @@ static double control_u_bound(const struct pfvi_state* s, double h, double omega
 static double control_seed(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0, double omega_start_max){
     double h = control_u_bound(s, r->dt, omega_start_max);
     int rejections = 0;
-    struct control_view view = {0., 0, 0., 0.};
+    struct control_view view = {0., 0., 0, 0., 0.};
     for (;;){
         const enum pfvi_trial trial = pfvi_trial_step(r, s, N, t0, h);
         if (trial == PFVI_TRIAL_ERROR){
@@ -173,39 +181,46 @@ static double control_seed(struct reb_simulation* r, struct pfvi_state* s, size_
 // The reversible step: h and the fitted frequencies solve
 //   F(h) = max(estimate/epsilon, |h| max_i omega_mean_i / u_max) = 1,
 //   omega_fit_i = mean of the particle's frequency at the two ends,
-// by a secant iteration on log F against log |h| together with fixed-point
-// updates of the frequencies. r->dt caps the step (REBOUND's exact finish
-// time relies on it); a capped step is taken if it satisfies F <= 1.
+// both to within PFVI_REVERSIBLE_TOLERANCE or the estimate's round-off,
+// whichever is larger (the estimate is a difference of first-order
+// quantities). F need not be monotonic in h (the estimate changes sign across
+// a curvature extremum), so the root is kept bracketed once it is: secant
+// steps in log F against log |h| through the last two trials, bisection in
+// log |h| when the secant leaves the bracket. r->dt
+// caps the step (REBOUND's exact finish time relies on it); a capped step is
+// taken if F <= 1 there.
 static double control_reversible(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0, double omega_start_max){
-    const double cap = r->dt;
+    const double cap = fabs(r->dt), sign = copysign(1., r->dt);
     double h = cap;
-    if (s->dt_reversible != 0. && copysign(1., s->dt_reversible) == copysign(1., cap)
-            && fabs(s->dt_reversible) < fabs(cap)){
-        h = s->dt_reversible;
+    if (s->dt_reversible != 0. && copysign(1., s->dt_reversible) == sign && fabs(s->dt_reversible) < cap){
+        h = fabs(s->dt_reversible);
     }
-    h = control_u_bound(s, h, omega_start_max);
+    h = fabs(control_u_bound(s, h, omega_start_max));
     const int fitted = (s->fitting != PFVI_FITTING_NONE && s->frequency == PFVI_FREQUENCY_CURVATURE);
-    double log_h_prev = NAN, log_F_prev = NAN;
-    struct control_view view = {0., 0, 0., 0.};
+    double lo = 0., hi = INFINITY;                // F(lo) < 1 < F(hi) once bracketed
+    double log_h_prev = NAN, log_F_prev = NAN;    // the previous trial, for the secant
+    struct control_view view = {0., 0., 0, 0., 0.};
     double F = NAN;
-    int solved = 0;
-    for (int trial_number=0; trial_number<PFVI_REVERSIBLE_MAX_TRIALS + PFVI_CONTROL_MAX_REJECTIONS; trial_number++){
-        const enum pfvi_trial trial = pfvi_trial_step(r, s, N, t0, h);
+    int solved = 0, trials = 0;
+    while (trials < PFVI_REVERSIBLE_MAX_TRIALS){
+        const enum pfvi_trial trial = pfvi_trial_step(r, s, N, t0, sign*h);
         if (trial == PFVI_TRIAL_ERROR){
             return 0.;
         }
         if (trial == PFVI_TRIAL_NOT_CONVERGED){
             s->n_rejected++;
+            hi = h;
+            log_h_prev = NAN;
             h *= 0.5;
-            log_h_prev = log_F_prev = NAN;
-            if (t0 + h == t0){
+            if (t0 + sign*h == t0){
                 break;
             }
-            continue;
+            continue;  // not counted as a trial of the step equation
         }
+        trials++;
         view = control_look(r, s, N);
         const double error_ratio = view.error/s->epsilon;
-        const double u_ratio = fabs(h)*view.omega_mean_max/s->u_max;
+        const double u_ratio = h*view.omega_mean_max/s->u_max;
         F = fmax(error_ratio, u_ratio);
         // The frequencies this h asks for, and how far they are from those used.
         double change = 0., omega_scale = 0.;
@@ -217,29 +232,16 @@ static double control_reversible(struct reb_simulation* r, struct pfvi_state* s,
             }
             change = (omega_scale > 0.) ? change/omega_scale : 0.;
         }
-        double h_next;
+        const double noise = (error_ratio >= u_ratio && view.error > 0.) ? view.noise/view.error : 0.;
+        const double tolerance = fmax(PFVI_REVERSIBLE_TOLERANCE, 4.*noise);
+        const int frequencies_solved = change <= tolerance;
         if (!view.informed || F == 0.){
-            h_next = fabs(cap);  // nothing limits the step but the cap
-        }else{
-            const double log_h = log(fabs(h)), log_F = log(F);
-            double slope = (error_ratio >= u_ratio) ? PFVI_CONTROL_ORDER : 1.;
-            if (isfinite(log_h_prev) && log_h != log_h_prev){
-                const double secant = (log_F - log_F_prev)/(log_h - log_h_prev);
-                if (secant >= 0.5 && secant <= 10.){
-                    slope = secant;
-                }
+            // Nothing but the cap limits the step.
+            if (h == cap && frequencies_solved){
+                solved = 1;
+                break;
             }
-            h_next = fabs(h)*exp(-log_F/slope);
-            h_next = fmin(h_next, 10.*fabs(h));
-            h_next = fmax(h_next, 0.1*fabs(h));
-            log_h_prev = log_h;
-            log_F_prev = log_F;
-        }
-        const int capped = h_next >= fabs(cap);
-        h_next = copysign(fmin(h_next, fabs(cap)), cap);
-        const int h_solved = fabs(h_next - h) <= PFVI_REVERSIBLE_TOLERANCE*fabs(h)
-            || (capped && h == cap && F <= 1.);
-        if (h_solved && change <= PFVI_REVERSIBLE_TOLERANCE){
+        }else if (frequencies_solved && (fabs(F - 1.) <= tolerance || (h == cap && F <= 1.))){
             solved = 1;
             break;
         }
@@ -249,17 +251,62 @@ static double control_reversible(struct reb_simulation* r, struct pfvi_state* s,
                 s->omega_fit[i] = 0.5*(s->osculating_start[i].omega + s->omega_end[i]);
             }
         }
-        if (trial_number + 1 >= PFVI_REVERSIBLE_MAX_TRIALS){
+        double h_next;
+        if (!view.informed || F == 0.){
+            lo = h;
+            log_h_prev = NAN;
+            h_next = fmin(cap, PFVI_CONTROL_GROW_MAX*h);
+        }else{
+            const double log_h = log(h), log_F = log(F);
+            if (F < 1.){
+                lo = h;
+            }else{
+                hi = h;
+            }
+            // Secant through this trial and the previous one; the estimate's
+            // order if there is none or its slope is implausible.
+            double slope = (error_ratio >= u_ratio) ? PFVI_CONTROL_ORDER : 1.;
+            if (isfinite(log_h_prev) && log_h != log_h_prev){
+                const double secant = (log_F - log_F_prev)/(log_h - log_h_prev);
+                if (secant >= 0.3 && secant <= 30.){
+                    slope = secant;
+                }
+            }
+            h_next = h*exp(-log_F/slope);
+            h_next = fmin(fmax(h_next, 0.1*h), 10.*h);
+            if (!(h_next > lo && h_next < hi)){
+                h_next = (lo > 0.) ? sqrt(lo*hi) : 0.5*hi;  // bisection in log h
+            }
+            h_next = fmin(h_next, cap);
+            log_h_prev = log_h;
+            log_F_prev = log_F;
+        }
+        if (t0 + sign*h_next == t0){
             break;
         }
         h = h_next;
     }
+    if (!solved && lo > 0.){
+        // Not solved in time: take the largest step tried that met epsilon.
+        // It is not time-symmetric; counted in n_asymmetric.
+        h = lo;
+        const enum pfvi_trial trial = pfvi_trial_step(r, s, N, t0, sign*h);
+        if (trial == PFVI_TRIAL_ERROR){
+            return 0.;
+        }
+        if (trial == PFVI_TRIAL_OK){
+            view = control_look(r, s, N);
+            solved = 1;
+            s->n_asymmetric++;
+        }
+    }
     if (!solved){
         pfvi_error(r, "pfvi: the reversible step equation from t = %.17g was not solved in %d trial steps "
                 "(last dt = %.6g, estimate/epsilon = %.3g); step not taken, state restored. Try "
-                "step_control = 'seed' or a larger epsilon.", t0, PFVI_REVERSIBLE_MAX_TRIALS, h, F);
+                "step_control = 'seed' or a larger epsilon.", t0, trials, sign*h, F);
         return 0.;
     }
+    h *= sign;
     pfvi_commit_step(r, s, N, h);
     s->error_estimate = view.error;
     s->dt_reversible = h;

@@ -134,6 +134,9 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "solve did not converge and was retried shorter).", REB_UINT64, n_rejected),
     PFVI_FIELD("Statistic: trial steps, taken or not (the work done: n_attempts / n_steps per step).",
         REB_UINT64, n_attempts),
+    PFVI_FIELD("Statistic: 'reversible' steps whose step equation was not solved in 40 trial "
+        "steps and that were taken at the largest step tried meeting epsilon (not time-symmetric).",
+        REB_UINT64, n_asymmetric),
     PFVI_FIELD("Statistic: the step control's error estimate for the last step taken "
         "(0 with fixed steps).", REB_DOUBLE, error_estimate),
     PFVI_FIELD("Statistic: smallest omega used in the last step (after limiting).",
