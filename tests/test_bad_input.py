@@ -49,6 +49,10 @@ def set_raw(sim, field, value):
     ("u_max", 0.0, r"integrator\.u_max = 0 is not valid"),
     ("u_max", 3.2, r"integrator\.u_max = 3\.2 is not valid"),
     ("u_max", math.nan, r"integrator\.u_max = nan"),
+    ("epsilon", -1e-6, r"integrator\.epsilon = -1e-06 is not valid; it must be finite and >= 0"),
+    ("epsilon", math.nan, r"integrator\.epsilon = nan is not valid"),
+    ("epsilon", math.inf, r"integrator\.epsilon = inf is not valid"),
+    ("step_control", 2, r"integrator\.step_control = 2 is not valid; allowed: 'seed', 'reversible'"),
 ])
 def test_invalid_field_values(field, value, match, stages):
     sim = pfvi_sim(stages)
