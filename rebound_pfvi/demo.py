@@ -41,6 +41,7 @@ def configure(sim, name, period, steps_per_orbit):
     if name.startswith("pfvi"):
         sim.integrator = "pfvi"
         sim.integrator.epsilon = 0.  # fixed steps of dt
+        sim.integrator.stages = 2  # the two-point scheme unless a test sets s
         sim.integrator.fitting = name.split(":")[1]
         sim.dt = period / steps_per_orbit
     elif name == "whfast":

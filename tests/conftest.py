@@ -33,6 +33,7 @@ def harmonic_oscillator(omega, q0=(1.0, 0.3), v0=(0.2, 0.7), **fields):
     sim.additional_forces = force
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.integrator.frequency = "fixed"
     sim.integrator.omega = omega
     for name, value in fields.items():

@@ -21,6 +21,7 @@ def setup_sim(stages=2):
     sim.move_to_com()
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.integrator.fitting = "phase"
     sim.integrator.u_max = 0.8
     sim.integrator.stages = stages
@@ -154,13 +155,14 @@ def test_abi_check_names_both_versions(monkeypatch):
 def test_documentation_lists_every_field():
     sim = rebound.Simulation()
     sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
     doc = " ".join(sim.integrator.__doc__.split())
     assert "Kosmas & Vlachos, \"Phase-fitted Discrete Lagrangian Integrators\"" in doc
-    for field in ("fitting", "frequency", "omega", "stages", "u_max", "n_steps", "n_u_limited",
-                  "n_force_evaluations", "n_iterations", "iterations_max", "iterations_mean",
+    for field in ("fitting", "frequency", "omega", "stages", "u_max", "epsilon", "step_control",
+                  "n_steps", "n_u_limited", "n_force_evaluations", "n_iterations", "iterations_max",
+                  "iterations_mean", "n_rejected", "n_attempts", "n_asymmetric", "error_estimate",
                   "omega_min", "omega_max"):
         assert f"{field} :" in doc
     assert "'phase-literal'" in doc
     assert (sim.integrator.fitting, sim.integrator.frequency, sim.integrator.stages,
-            sim.integrator.u_max, sim.integrator.omega) == ("phase", "curvature", 2, 1.0, 0.0)
+            sim.integrator.u_max, sim.integrator.omega, sim.integrator.epsilon,
+            sim.integrator.step_control) == ("phase", "curvature", 4, 1.0, 0.0, 1e-6, "reversible")

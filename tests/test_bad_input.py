@@ -18,6 +18,7 @@ def pfvi_sim(stages=2):
     sim.add(m=0.0, a=2.0, e=0.1, primary=sim.particles[0])
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.integrator.stages = stages
     sim.dt = 0.01
     sim.integrate(0.5)  # mid-run, with a force already kept from the last step
@@ -166,6 +167,7 @@ def test_no_particles_advances_time():
     sim = rebound.Simulation()
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.dt = 0.1
     sim.steps(3)
     assert sim.t == pytest.approx(0.3)

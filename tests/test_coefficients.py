@@ -40,6 +40,7 @@ def pfvi_step(q0, v0, h, omega, force, fitting):
     sim.additional_forces = add_force
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.integrator.fitting = fitting
     sim.integrator.frequency = "fixed"
     sim.integrator.omega = omega

@@ -30,6 +30,7 @@ def test_test_particles_follow_rebound_semantics(testparticle_type):
         sim.integrator = integrator
         if integrator == "pfvi":
             sim.integrator.epsilon = 0.  # fixed steps of dt
+            sim.integrator.stages = 2  # the two-point scheme unless a test sets s
             sim.integrator.fitting = "none"
         sim.dt = 1e-3
         sim.integrate(1.0)
@@ -40,6 +41,7 @@ def test_test_particles_follow_rebound_semantics(testparticle_type):
     ref = planet_and_test_particle(1 - testparticle_type)
     ref.integrator = "pfvi"
     ref.integrator.epsilon = 0.  # fixed steps of dt
+    ref.integrator.stages = 2  # the two-point scheme unless a test sets s
     ref.integrator.fitting = "none"
     ref.dt = 1e-3
     ref.integrate(1.0)
@@ -63,6 +65,7 @@ def test_velocity_dependent_force_converges_at_second_order():
         sim.force_is_velocity_dependent = 1
         sim.integrator = "pfvi"
         sim.integrator.epsilon = 0.  # fixed steps of dt
+        sim.integrator.stages = 2  # the two-point scheme unless a test sets s
         sim.dt = h
         sim.integrate(2.0)
         return abs(sim.particles[0].vx - math.exp(-1.4)), sim.integrator.n_force_evaluations
@@ -79,6 +82,7 @@ def test_direct_gravity_modes(gravity):
     sim.gravity = gravity
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.dt = 1e-3
     E0 = sim.energy()
     sim.integrate(2 * math.pi)
@@ -99,6 +103,7 @@ def damped_oscillator_error(s, h, T=4.0):
     sim.force_is_velocity_dependent = 1
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.integrator.stages = s
     sim.integrator.fitting = "none"
     sim.dt = h

@@ -12,6 +12,7 @@ ORBITS = 1000
 def circular_errors(sim, fitting):
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.integrator.fitting = fitting
     p0, p1 = sim.particles[0], sim.particles[1]
     mu = sim.G * (p0.m + p1.m)
@@ -62,6 +63,7 @@ def test_fitted_splitting_is_unstable_for_a_body_whose_force_ignores_its_positio
     sim = two_body(1e-3, com=True)
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     P = 2 * math.pi / math.sqrt(1 + 1e-3)
     h = P / n
     sim.dt = h
@@ -84,6 +86,7 @@ def test_classical_scheme_is_stable_there():
     sim = two_body(1e-3, com=True)
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.integrator.fitting = "none"
     E0 = sim.energy()
     sim.dt = 2 * math.pi / 20
@@ -106,6 +109,7 @@ def test_eccentric_two_body_against_ias15():
         E0 = sim.energy()
         sim.integrator = "pfvi"
         sim.integrator.epsilon = 0.  # fixed steps of dt
+        sim.integrator.stages = 2  # the two-point scheme unless a test sets s
         sim.integrator.fitting = fitting
         sim.dt = T / 10 / 1000
         sim.integrate(T)

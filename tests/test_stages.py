@@ -91,6 +91,7 @@ def anharmonic_sim(s, fitting, omega, q0, v0):
     sim.additional_forces = force
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.integrator.stages = s
     sim.integrator.fitting = fitting
     sim.integrator.frequency = "fixed"
@@ -170,6 +171,7 @@ def kepler_errors(s, fitting, n):
     orbit = sim.particles[1].orbit(primary=sim.particles[0])
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.integrator.stages = s
     sim.integrator.fitting = fitting
     sim.dt = orbit.P / n
@@ -244,6 +246,7 @@ def star_planet(s, e, steps_per_orbit):
     sim = two_body(1e-3, e=e, com=True)
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.integrator.stages = s
     sim.dt = 2 * math.pi / steps_per_orbit
     return sim
@@ -264,6 +267,7 @@ def test_two_point_steps_count_one_iteration_each():
     sim = two_body(1e-3, e=0.5, com=True)
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.dt = 0.01
     sim.steps(10)
     assert sim.integrator.n_iterations == 10 and sim.integrator.iterations_max == 1
@@ -284,6 +288,7 @@ def test_non_finite_force_at_a_stage_point_leaves_the_state_untouched(s):
     sim.additional_forces = nan_at_interior_stage
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.integrator.stages = s
     sim.dt = 0.1
     sim.steps(5)

@@ -10,6 +10,7 @@ def test_none_equals_velocity_verlet():
     sim = two_body(1e-3, e=0.5, com=True)
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.integrator.fitting = "none"
     h = 0.01
     sim.dt = h
@@ -53,6 +54,7 @@ def e05_round_trip(fitting, frequency, n):
     sim = two_body(1e-3, e=0.5, com=True)
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.integrator.fitting = fitting
     sim.integrator.frequency = frequency
     sim.integrator.omega = 1.0
@@ -76,6 +78,7 @@ def test_stage_solve_round_trip_returns_to_start(stages, fitting, frequency):
     sim = two_body(1e-3, e=0.5, com=True)
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.integrator.stages = stages
     sim.integrator.fitting = fitting
     sim.integrator.frequency = frequency
@@ -103,6 +106,7 @@ def test_backward_integration_mirrors_forward():
     for sim in (fwd, bwd):
         sim.integrator = "pfvi"
         sim.integrator.epsilon = 0.  # fixed steps of dt
+        sim.integrator.stages = 2  # the two-point scheme unless a test sets s
         sim.dt = 0.01
     for p in bwd.particles:
         p.vx, p.vy, p.vz = -p.vx, -p.vy, -p.vz
@@ -118,6 +122,7 @@ def test_exact_finish_time_lands_on_t():
     sim = two_body(1e-3, e=0.3, com=True)
     sim.integrator = "pfvi"
     sim.integrator.epsilon = 0.  # fixed steps of dt
+    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
     sim.dt = 0.03
     sim.integrate(1.0)
     assert sim.t == 1.0

@@ -87,7 +87,9 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     PFVI_FIELD("Frequency used when frequency = 'fixed' (code units of 1/time, finite, >= 0). Default 0.",
         REB_DOUBLE, omega),
     PFVI_FIELD("Number s of Gauss-Lobatto nodes of the discrete Lagrangian, 2 to 6; the order is "
-        "2s - 2. s = 2 (default): nodes 0 and 1, an explicit step with one force evaluation. "
+        "2s - 2. s = 2: nodes 0 and 1, an explicit step with one force evaluation; with "
+        "'phase' it is unstable for a body whose force ignores its own position (the star in a "
+        "centre-of-mass frame), see docs/method.md. s = 4 (default): order 6, stable there. "
         "s >= 3: interior corrections delta q^j made stationary (seed section 6), solved by "
         "fixed-point iteration with s - 1 force evaluations per iteration (s if forces depend "
         "on velocities).",
@@ -159,7 +161,7 @@ static void* pfvi_create(void){
     }
     s->fitting = PFVI_FITTING_PHASE;
     s->frequency = PFVI_FREQUENCY_CURVATURE;
-    s->stages = 2;
+    s->stages = 4;
     s->omega = 0.;
     s->u_max = PFVI_U_MAX_DEFAULT;
     s->epsilon = PFVI_EPSILON_DEFAULT;
