@@ -1,10 +1,15 @@
 """Adaptive steps (seed section 4): long-term energy, monotonicity, reversibility.
 
-    python -P benchmarks/adaptive.py longterm [--e 0.95] [--orbits 10000] [--epsilon 1e-6] [--stages 2]
+    python -P benchmarks/adaptive.py longterm [--e 0.95] [--orbits 10000] [--epsilon 1e-6] [--stages 2] [--frame seed|com]
     python -P benchmarks/adaptive.py monotone [--e 0.9]
-    python -P benchmarks/adaptive.py roundtrip [--e 0.9] [--orbits 10]
+    python -P benchmarks/adaptive.py roundtrip [--e 0.9] [--orbits 10] [--epsilon 1e-8]
+    python -P benchmarks/adaptive.py retrace [--e 0.9] [--steps 400] [--epsilon 1e-6]
+    python -P benchmarks/adaptive.py order
+    python -P benchmarks/adaptive.py local [--u 0.05]
+    python -P benchmarks/adaptive.py defaults [--orbits 1000]
 
-Two bodies (m = 1 and 1e-3, a = 1, COM frame, starting at pericentre), G = 1.
+Two bodies, a = 1, G = 1, from pericentre: the seed's problem (a massless body
+about a unit mass at rest) or m = 1e-3 about m = 1 in the COM frame.
 `longterm` integrates both step controls and both fittings and reports the
 largest relative energy error over the first and over the last tenth of the
 run, checked after every step. Wall times are single runs on a shared machine: compare them within
@@ -65,8 +70,7 @@ def longterm(e, orbits, epsilon, stages, frame):
             while sim.t < 0.1 * orbits * period:
                 sim.steps(1)
                 first = max(first, abs(energy(sim) / E0 - 1))
-            while sim.t < 0.9 * orbits * period:
-                sim.steps(100)
+            sim.integrate(0.9 * orbits * period, exact_finish_time=0)  # ends within one step
             while sim.t < orbits * period:
                 sim.steps(1)
                 last = max(last, abs(energy(sim) / E0 - 1))
@@ -86,41 +90,119 @@ def energy_error_after(e, orbits, epsilon, step_control="seed", fitting="phase",
     E0 = energy(sim)
     configure(sim, epsilon, step_control, fitting, stages)
     sim.integrate(orbits * period)
-    return abs(energy(sim) / E0 - 1), sim.integrator.n_steps
+    it = sim.integrator
+    return abs(energy(sim) / E0 - 1), it.n_steps, it.n_attempts / it.n_steps, it.n_asymmetric
 
 
 def monotone(e):
     print(f"e = {e}, one orbit: final relative energy error against epsilon")
     print("| step_control | fitting | stages | " + " | ".join(f"{10.0**-k:.0e}" for k in range(4, 12)) + " |")
     print("|---" * 11 + "|")
+    costs = []
     for step_control in ("seed", "reversible"):
         for fitting in ("phase", "none"):
             for stages in (2, 4):
-                errs = [energy_error_after(e, 1, 10.0**-k, step_control, fitting, stages)[0] for k in range(4, 12)]
-                print(f"| {step_control} | {fitting} | {stages} | " + " | ".join(f"{x:.1e}" for x in errs) + " |")
+                runs = [energy_error_after(e, 1, 10.0**-k, step_control, fitting, stages) for k in range(4, 12)]
+                label = f"| {step_control} | {fitting} | {stages} | "
+                print(label + " | ".join(f"{run[0]:.1e}" for run in runs) + " |")
+                costs.append(label + " | ".join(f"{run[2]:.2f} ({run[3]})" for run in runs) + " |")
+    print("\ntrial steps per step (n_asymmetric), same runs")
+    print("| step_control | fitting | stages | " + " | ".join(f"{10.0**-k:.0e}" for k in range(4, 12)) + " |")
+    print("|---" * 11 + "|")
+    print("\n".join(costs))
 
 
-def roundtrip(e, orbits):
-    print(f"e = {e}, {orbits} orbits forward, then back to the first step point (reversible, exact_finish_time = 0)")
-    print("| fitting | stages | epsilon | steps | position error after the round trip | relative energy error |")
-    print("|---|---|---|---|---|---|")
-    for fitting in ("phase", "none"):
+def roundtrip(e, orbits, epsilon):
+    """Forward `orbits` periods and back to t = 0 with exact_finish_time (the
+    protocol of tests/test_adaptive.py), COM frame, both controllers."""
+    print(f"e = {e}, COM frame, {orbits} orbits forward and back to t = 0, epsilon = {epsilon:g}")
+    print("| step_control | stages | fitting | steps forward | largest position error at t = 0 |")
+    print("|---|---|---|---|---|")
+    for step_control in ("seed", "reversible"):
         for stages in (2, 4):
-            for epsilon in (1e-6, 1e-9):
-                sim = pair(e)
-                period = sim.particles[1].P
-                configure(sim, epsilon, "reversible", fitting, stages)
-                sim.dt = period  # the cap; the step equation chooses
+            for fitting in ("phase", "none"):
+                sim = pair(e, "com")
+                configure(sim, epsilon, step_control, fitting, stages)
                 start = [(p.x, p.y, p.z) for p in sim.particles]
-                E0 = energy(sim)
-                sim.integrate(orbits * period, exact_finish_time=0)
-                first = sim.integrator.dt_reversible if False else None
+                sim.integrate(orbits * sim.particles[1].P)
                 steps = sim.integrator.n_steps
-                sim.dt = -sim.dt
-                sim.integrate(0.0, exact_finish_time=0)
-                back = [(p.x, p.y, p.z) for p in sim.particles]
-                err = max(math.dist(a, b) for a, b in zip(start, back))
-                print(f"| {fitting} | {stages} | {epsilon:g} | {steps} | {err:.1e} | {abs(energy(sim) / E0 - 1):.1e} | t = {sim.t:.3g}")
+                sim.integrate(0.0)
+                err = max(math.dist(a, (p.x, p.y, p.z)) for a, p in zip(start, sim.particles))
+                print(f"| {step_control} | {stages} | {fitting} | {steps} | {err:.1e} |")
+
+
+def retrace(e, steps, epsilon):
+    """Where the backward steps of 'reversible' stop retracing the forward ones:
+    `steps` steps forward from f = 2, then as many back, step by step."""
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=e, f=2.0)
+    sim.move_to_com()
+    configure(sim, epsilon, "reversible", "none", 2)
+    sim.dt = sim.particles[1].P
+    forward, times = [], []
+    for _ in range(steps):
+        times.append(sim.t)
+        sim.steps(1)
+        forward.append(sim.dt_last_done)
+    sim.dt = -sim.dt
+    backward = []
+    for _ in range(steps):
+        sim.steps(1)
+        backward.append(-sim.dt_last_done)
+    backward.reverse()
+    print(f"e = {e}, epsilon = {epsilon:g}, fitting none, s = 2: relative difference of the backward "
+          "step from the forward step it should retrace")
+    print("| step | t | forward step | relative difference |")
+    print("|---|---|---|---|")
+    for k in range(0, steps, max(1, steps // 40)):
+        print(f"| {k} | {times[k]:.4f} | {forward[k]:.6e} | {(backward[k] - forward[k]) / forward[k]:.1e} |")
+    print(f"back at t = {sim.t:.3e} (0 if every step were retraced)")
+
+
+def order():
+    """Order in h of the osculating-circle estimate: one step of h, h/2, ... from
+    several points of the orbit (fitting none, epsilon large so it is accepted)."""
+    print("| e | mean anomaly | estimate for h = 1e-2 ... 6.25e-4 | slopes (log2 of successive ratios) |")
+    print("|---|---|---|---|")
+    for e in (0.5, 0.9):
+        for M in (0.0, 0.02, 0.3, math.pi):
+            row = []
+            for h in (1e-2, 5e-3, 2.5e-3, 1.25e-3, 6.25e-4):
+                sim = rebound.Simulation()
+                sim.add(m=1.0)
+                sim.add(m=0.0, a=1.0, e=e, M=M)
+                configure(sim, 1e10, "seed", "none", 2)
+                sim.integrator.u_max = 1.5
+                sim.dt = h
+                sim.steps(1)
+                row.append(sim.integrator.error_estimate)
+            slopes = [math.log2(a / b) if b > 0 else math.nan for a, b in zip(row, row[1:])]
+            print(f"| {e} | {M:.3g} | " + ", ".join(f"{x:.2e}" for x in row) + " | "
+                  + ", ".join(f"{x:.2f}" for x in slopes) + " |")
+
+
+def defaults(orbits):
+    """Default settings (only stages varied), m = 1e-3 about m = 1, COM frame."""
+    print(f"| e | stages | outcome | steps/orbit | trial steps/step | energy error | wall [s] | star's distance from the COM |")
+    print("|---|---|---|---|---|---|---|---|")
+    for e in (0.0, 0.5, 0.9):
+        for stages in (2, 4):
+            sim = pair(e, "com")
+            E0 = sim.energy()
+            sim.integrator = "pfvi"
+            sim.integrator.stages = stages
+            tick = time.perf_counter()
+            try:
+                sim.integrate(orbits * sim.particles[1].P)
+                outcome = "finished"
+            except RuntimeError as error:
+                outcome = f"refused at t = {sim.t:.0f}: {str(error)[:40]}..."
+            wall = time.perf_counter() - tick
+            it = sim.integrator
+            star = math.hypot(sim.particles[0].x, sim.particles[0].y)
+            print(f"| {e} | {stages} | {outcome} | {it.n_steps / orbits:.0f} | {it.n_attempts / it.n_steps:.2f} |"
+                  f" {abs(sim.energy() / E0 - 1):.1e} | {wall:.2f} | {star:.2e} |")
 
 
 def local(u):
@@ -167,6 +249,14 @@ def main(argv=None):
     p = sub.add_parser("roundtrip")
     p.add_argument("--e", type=float, default=0.9)
     p.add_argument("--orbits", type=int, default=10)
+    p.add_argument("--epsilon", type=float, default=1e-8)
+    p = sub.add_parser("retrace")
+    p.add_argument("--e", type=float, default=0.9)
+    p.add_argument("--steps", type=int, default=400)
+    p.add_argument("--epsilon", type=float, default=1e-6)
+    sub.add_parser("order")
+    p = sub.add_parser("defaults")
+    p.add_argument("--orbits", type=int, default=1000)
     args = parser.parse_args(argv)
     if args.command == "longterm":
         longterm(args.e, args.orbits, args.epsilon, args.stages, args.frame)
@@ -174,8 +264,14 @@ def main(argv=None):
         local(args.u)
     elif args.command == "monotone":
         monotone(args.e)
+    elif args.command == "roundtrip":
+        roundtrip(args.e, args.orbits, args.epsilon)
+    elif args.command == "retrace":
+        retrace(args.e, args.steps, args.epsilon)
+    elif args.command == "order":
+        order()
     else:
-        roundtrip(args.e, args.orbits)
+        defaults(args.orbits)
 
 
 if __name__ == "__main__":

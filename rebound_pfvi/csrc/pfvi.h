@@ -46,8 +46,9 @@
 #define PFVI_CONTROL_SHRINK_MIN 0.1
 // Consecutive rejections of one step after which it is given up.
 #define PFVI_CONTROL_MAX_REJECTIONS 60
-// The reversible step: trial steps per step at most, and the relative change
-// of h and of the fitted frequencies at which the step equation counts as solved.
+// The reversible step: trial steps per step at most, and the tolerance on
+// |F - 1| and on the relative change of the fitted frequencies at which the
+// step equation counts as solved (raised to the estimate's round-off level).
 #define PFVI_REVERSIBLE_MAX_TRIALS 40
 #define PFVI_REVERSIBLE_TOLERANCE 1e-10
 
