@@ -129,6 +129,7 @@ struct pfvi_end_state {
 struct pfvi_osculating {
     double R;
     double offset[3];
+    double binormal[3];  // (v x a) / |v x a|: the normal of the circle's plane
     double omega;        // |v x a| / |v|^2, the curvature frequency
     int defined;
 };
