@@ -1,0 +1,334 @@
+"""Error against run time: pfvi beside REBOUND's integrators on one scene.
+
+A sweep is a list of :class:`Setting` s (one integrator, one accuracy knob:
+pfvi's and IAS15's epsilon, BS's tolerance, WHFast's and LEAPFROG's step).
+Each setting is run by :func:`run_setting`, which
+
+1. times ``sim.integrate(t_end)`` from a fresh simulation ``repeats`` times
+   and keeps the best (least) wall time; the final state of the timed run
+   gives the final relative energy error and the position error against the
+   scene's reference;
+2. runs once more, untimed, stopping at ``samples`` evenly spaced times
+   without changing the steps (``exact_finish_time=0``) to find the largest
+   relative energy error, with a callback in ``additional_forces`` that adds
+   nothing and counts force evaluations.
+
+:func:`run` sends the settings to a local process pool (default), to a Dask
+``distributed`` scheduler (``scheduler="tcp://..."``), or runs them in this
+process (``workers=1``). Runs that share cores are timed under the same load;
+compare wall times within one sweep, not across machines or sweeps.
+
+Everything here is unitless (AU, yr, Msun); :class:`Results` converts to
+astropy Quantities at the boundary.
+"""
+import math
+import os
+import signal
+import time
+from dataclasses import asdict, dataclass, field
+
+from . import scenes as _scenes
+
+FAMILIES = ("pfvi", "ias15", "whfast", "leapfrog", "bs")
+#: The accuracy knob of each family, as the table and plot call it.
+KNOBS = {"pfvi": "epsilon", "ias15": "epsilon", "bs": "eps", "whfast": "steps/period",
+         "leapfrog": "steps/period"}
+
+
+@dataclass(frozen=True)
+class Setting:
+    """One run of a sweep: `family` with `options`, at knob value `value`."""
+
+    family: str
+    value: float
+    options: tuple = ()  # (name, value) pairs, e.g. (("stages", 4), ("fitting", "phase"))
+    line: str = field(default="", compare=False)  # plot line and table group
+
+    def __post_init__(self):
+        if self.family not in FAMILIES:
+            raise ValueError(f"family={self.family!r} is not an integrator family; allowed: {', '.join(FAMILIES)}")
+        if not (isinstance(self.value, (int, float)) and self.value > 0 and math.isfinite(self.value)):
+            raise ValueError(f"{KNOBS[self.family]}={self.value!r} for {self.family} must be a positive number")
+        if not self.line:
+            label = self.family if self.family != "ias15" else "IAS15"
+            label = {"whfast": "WHFast", "leapfrog": "LEAPFROG", "bs": "BS"}.get(label, label)
+            opts = dict(self.options)
+            if self.family == "pfvi":
+                label += f" s={opts.get('stages', 4)} {opts.get('fitting', 'phase')}"
+                if opts.get("frequency", "curvature") != "curvature":
+                    label += f" ({opts['frequency']} omega)"
+                if opts.get("step_control", "reversible") != "reversible":
+                    label += f" {opts['step_control']}"
+            object.__setattr__(self, "line", label)
+
+    @property
+    def knob(self):
+        return KNOBS[self.family]
+
+
+#: Default sweeps. "quick" is what `rebound-pfvi compare` runs without --full.
+PFVI_EPSILONS = {"quick": (1e-4, 1e-6, 1e-8, 1e-10), "full": tuple(10.0 ** -k for k in range(4, 12))}
+PFVI_STAGES = {"quick": (2, 4), "full": (2, 4, 6)}
+PFVI_FITTINGS = ("phase", "none")
+IAS15_EPSILONS = {"quick": (1e-3, 1e-5, 1e-7, 1e-9), "full": tuple(10.0 ** -k for k in range(2, 10))}
+BS_EPS = {"quick": (1e-4, 1e-7, 1e-10, 1e-13), "full": tuple(10.0 ** -k for k in range(4, 14))}
+FIXED_STEPS = {"quick": (100, 1000, 10000), "full": (30, 100, 300, 1000, 3000, 10000, 30000)}
+
+
+def default_settings(scene, size="quick", families=None):
+    """The sweep for `scene`: pfvi stages x fitting x epsilon (and the scene's
+    frequency options), IAS15 epsilon, BS tolerance, WHFast and LEAPFROG steps
+    per period. `families` restricts it."""
+    if size not in ("quick", "full"):
+        raise ValueError(f"size={size!r} is not valid; allowed: quick, full")
+    families = tuple(families or scene.families)
+    for family in families:
+        if family not in FAMILIES:
+            raise ValueError(f"family={family!r} is not an integrator family; allowed: {', '.join(FAMILIES)}")
+    settings = []
+    for family in families:
+        if family not in scene.families:
+            continue
+        if family == "pfvi":
+            for frequency in scene.pfvi_frequencies:
+                for stages in PFVI_STAGES[size]:
+                    for fitting in PFVI_FITTINGS:
+                        if frequency != "curvature" and fitting == "none":
+                            continue  # "none" ignores the frequency
+                        for epsilon in PFVI_EPSILONS[size]:
+                            settings.append(Setting("pfvi", epsilon, (("stages", stages), ("fitting", fitting),
+                                                                      ("frequency", frequency))))
+        elif family == "ias15":
+            settings += [Setting("ias15", x) for x in IAS15_EPSILONS[size]]
+        elif family == "bs":
+            settings += [Setting("bs", x) for x in BS_EPS[size]]
+        else:
+            settings += [Setting(family, n) for n in FIXED_STEPS[size]]
+    return settings
+
+
+def configure(sim, scene, setting):
+    """Sets the integrator of `sim` as `setting` asks."""
+    opts = dict(setting.options)
+    if setting.family == "pfvi":
+        sim.integrator = "pfvi"
+        sim.integrator.stages = int(opts.get("stages", 4))
+        sim.integrator.fitting = opts.get("fitting", "phase")
+        sim.integrator.step_control = opts.get("step_control", "reversible")
+        scene.configure_pfvi(sim, opts.get("frequency", "curvature"))
+        sim.integrator.epsilon = setting.value
+        sim.dt = scene.period / 10.0  # the cap on adaptive steps; the controller starts from it
+    elif setting.family == "ias15":
+        sim.integrator = "ias15"
+        sim.integrator.epsilon = setting.value
+        sim.dt = scene.period / 100.0  # IAS15's first trial step
+    elif setting.family == "bs":
+        sim.integrator = "bs"
+        sim.integrator.eps_abs = setting.value
+        sim.integrator.eps_rel = setting.value
+        sim.dt = scene.period / 100.0
+    else:
+        sim.integrator = setting.family
+        sim.dt = scene.period / setting.value
+
+
+def _install_counter(sim, scene, counter):
+    if not scene.counts_own_forces:
+        def count(simp):
+            counter[0] += 1
+
+        sim.additional_forces = count
+
+
+def run_setting(scene, setting, reference, repeats=3, samples=100):
+    """One row of results for `setting` on `scene` (see the module docstring)."""
+    row = {"scene": scene.name, "family": setting.family, "line": setting.line, "knob": setting.knob,
+           "value": setting.value, "options": dict(setting.options), "status": "ok"}
+    t_end = scene.t_end
+    try:
+        walls = []
+        for _ in range(max(1, int(repeats))):
+            sim = scene.build()
+            configure(sim, scene, setting)
+            E0 = scene.energy(sim)
+            tick = time.perf_counter()
+            sim.integrate(t_end, exact_finish_time=1)
+            walls.append(time.perf_counter() - tick)
+        row.update(wall_s=min(walls), walls_s=walls, steps=int(sim.steps_done), t_final=float(sim.t),
+                   energy_error_final=abs(scene.energy(sim) / E0 - 1.0),
+                   position_error=scene.position_error(sim, reference))
+        if setting.family == "pfvi":
+            row.update(pfvi_force_evaluations=int(sim.integrator.n_force_evaluations),
+                       attempts_per_step=int(sim.integrator.n_attempts) / max(1, int(sim.integrator.n_steps)),
+                       iterations_mean=float(sim.integrator.iterations_mean),
+                       n_rejected=int(sim.integrator.n_rejected))
+        # Untimed: sampled energy error and counted force evaluations.
+        counter = [0]
+        sim = scene.build(counter=counter)
+        _install_counter(sim, scene, counter)
+        configure(sim, scene, setting)
+        worst = 0.0
+        for k in range(1, samples):
+            sim.integrate(t_end * k / samples, exact_finish_time=0)
+            worst = max(worst, abs(scene.energy(sim) / E0 - 1.0))
+            if not math.isfinite(worst):
+                break
+        else:
+            sim.integrate(t_end, exact_finish_time=1)
+        worst = max(worst, abs(scene.energy(sim) / E0 - 1.0))
+        row.update(energy_error_max=worst, force_evaluations=counter[0])
+        values = (row["energy_error_final"], row["position_error"], worst)
+        if not all(math.isfinite(v) for v in values):
+            row["status"] = "diverged (non-finite energy or position)"
+    except Exception as error:  # noqa: BLE001 - a refused or failed run is a result, recorded with its message
+        row["status"] = f"failed: {type(error).__name__}: {error}"
+    return row
+
+
+def _task(args):
+    index, scene, setting, reference, repeats, samples = args
+    return index, run_setting(scene, setting, reference, repeats, samples)
+
+
+def _ignore_sigint():
+    # Ctrl-C belongs to the parent, which stops the pool and keeps what finished.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@dataclass
+class Results:
+    """The rows of a sweep and what is needed to read them."""
+
+    scene: object
+    settings: list
+    rows: list
+    reference: dict
+    repeats: int
+    samples: int
+    workers: int
+    scheduler: str
+    wall_s: float
+    interrupted: bool = False
+
+    @property
+    def finished(self):
+        return len(self.rows)
+
+    def to_dict(self):
+        from .units import REBOUND_UNITS
+
+        return {"scene": self.scene.name, "params": self.scene.params, "description": self.scene.describe(),
+                "t_end": self.scene.t_end, "period": self.scene.period,
+                "units": {"length": REBOUND_UNITS[0], "time": REBOUND_UNITS[1], "mass": REBOUND_UNITS[2],
+                          "wall_s": "s"},
+                "reference": {k: v for k, v in self.reference.items() if k in ("how", "uncertainty")},
+                "repeats": self.repeats, "samples": self.samples, "workers": self.workers,
+                "scheduler": self.scheduler, "settings": len(self.settings), "finished": self.finished,
+                "interrupted": self.interrupted, "sweep_wall_s": self.wall_s, "rows": self.rows}
+
+    def table(self):
+        """The rows as an astropy QTable, with Quantities: position error in AU
+        and km, wall time in s, the knob's step in yr for fixed-step runs."""
+        import astropy.units as u
+        from astropy.table import QTable
+
+        ok = [r for r in self.rows if r["status"] == "ok"]
+        t = QTable()
+        t["line"] = [r["line"] for r in ok]
+        t["knob"] = [r["knob"] for r in ok]
+        t["value"] = [r["value"] for r in ok]
+        t["steps"] = [r["steps"] for r in ok]
+        t["force_evaluations"] = [r["force_evaluations"] for r in ok]
+        t["wall_time"] = [r["wall_s"] for r in ok] << u.s
+        t["energy_error_max"] = [r["energy_error_max"] for r in ok]
+        t["energy_error_final"] = [r["energy_error_final"] for r in ok]
+        t["position_error"] = [r["position_error"] for r in ok] << u.AU
+        t["position_error_km"] = t["position_error"].to(u.km)
+        return t
+
+
+def run(scene, settings=None, repeats=3, samples=100, workers=None, scheduler=None, progress=None):
+    """Runs a sweep; returns :class:`Results` (rows in the order of `settings`).
+
+    workers: processes of the local pool (default: the machine's cores; 1 runs
+    here). scheduler: the address of a Dask distributed scheduler, or a
+    ``distributed.Client``. progress(done, total, row) is called after each run.
+    Ctrl-C stops the sweep and returns the finished rows with
+    ``interrupted=True``.
+    """
+    settings = list(settings if settings is not None else default_settings(scene))
+    if not settings:
+        raise ValueError("settings: the sweep is empty (no integrator family applies to this scene)")
+    if int(repeats) < 1:
+        raise ValueError(f"repeats={repeats!r} must be at least 1")
+    if int(samples) < 1:
+        raise ValueError(f"samples={samples!r} must be at least 1")
+    reference = scene.reference()
+    tasks = [(i, scene, s, reference, int(repeats), int(samples)) for i, s in enumerate(settings)]
+    done = {}
+    interrupted = False
+    tick = time.perf_counter()
+
+    def record(index, row):
+        done[index] = row
+        if progress:
+            progress(len(done), len(tasks), row)
+
+    try:
+        if scheduler is not None:
+            workers, where = _run_dask(tasks, scheduler, record)
+        else:
+            workers = int(workers or os.cpu_count() or 1)
+            if workers < 1:
+                raise ValueError(f"workers={workers!r} must be at least 1")
+            where = "local pool" if workers > 1 else "this process"
+            if workers == 1:
+                for task in tasks:
+                    record(*_task(task))
+            else:
+                _run_pool(tasks, workers, record)
+    except KeyboardInterrupt:
+        interrupted = True
+        where = "interrupted"
+    rows = [done[i] for i in sorted(done)]
+    return Results(scene, settings, rows, reference, int(repeats), int(samples), workers, where,
+                   time.perf_counter() - tick, interrupted)
+
+
+def _run_pool(tasks, workers, record):
+    import multiprocessing
+
+    # spawn: workers start clean, without this process's ctypes callbacks.
+    pool = multiprocessing.get_context("spawn").Pool(workers, initializer=_ignore_sigint)
+    try:
+        for index, row in pool.imap_unordered(_task, tasks):
+            record(index, row)
+        pool.close()
+    except BaseException:  # Ctrl-C or a failure in the parent: stop the workers now
+        pool.terminate()
+        raise
+    finally:
+        pool.join()
+
+
+def _run_dask(tasks, scheduler, record):
+    try:
+        from distributed import Client, as_completed
+    except ImportError:
+        raise ImportError("scheduler: sending runs to Dask needs the [dask] extra: "
+                          "pip install 'rebound_pfvi[dask]'") from None
+    client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+    address = client.scheduler.address
+    try:
+        workers = len(client.scheduler_info()["workers"])
+        futures = [client.submit(_task, task, pure=False) for task in tasks]
+        try:
+            for future in as_completed(futures):
+                record(*future.result())
+        except KeyboardInterrupt:
+            client.cancel(futures)
+            raise
+    finally:
+        if client is not scheduler:
+            client.close()
+    return workers, f"dask {address}"

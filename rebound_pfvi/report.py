@@ -1,0 +1,161 @@
+"""Writing a sweep's results: JSON, CSV, a markdown page and a work-precision PNG."""
+import csv
+import json
+import math
+import os
+import platform
+
+#: Position errors (AU) at which the summary names the fastest run of each line.
+TARGETS = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)
+COLUMNS = ("line", "knob", "value", "status", "steps", "force_evaluations", "wall_s", "energy_error_max",
+           "energy_error_final", "position_error", "attempts_per_step", "iterations_mean")
+
+
+def _fmt(value, spec):
+    if value is None:
+        return "-"
+    if isinstance(value, float) and not math.isfinite(value):
+        return str(value)
+    return format(value, spec)
+
+
+def _knob(row):
+    if row["knob"] == "steps/period":
+        return f"{row['value']:g} steps/period"
+    return f"{row['knob']} {row['value']:.0e}"
+
+
+def markdown_table(rows):
+    lines = ["| integrator | setting | steps | force evals | wall [s] | max rel. energy err | "
+             "final rel. energy err | position err [AU] | note |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        if r["status"] != "ok":
+            lines.append(f"| {r['line']} | {_knob(r)} | - | - | - | - | - | - | {r['status']} |")
+            continue
+        note = ""
+        if r["family"] == "pfvi":
+            note = f"{r['attempts_per_step']:.1f} trials/step, {r['iterations_mean']:.1f} iterations"
+        lines.append(f"| {r['line']} | {_knob(r)} | {r['steps']} | {r['force_evaluations']} | "
+                     f"{r['wall_s']:.3g} | {r['energy_error_max']:.2e} | {r['energy_error_final']:.2e} | "
+                     f"{r['position_error']:.2e} | {note} |")
+    return "\n".join(lines)
+
+
+def fastest(rows, target):
+    """For each line, the run with the least wall time whose position error is <= target."""
+    best = {}
+    for r in rows:
+        if r["status"] == "ok" and r["position_error"] <= target:
+            if r["line"] not in best or r["wall_s"] < best[r["line"]]["wall_s"]:
+                best[r["line"]] = r
+    return best
+
+
+def summary_table(rows, floor=0.0):
+    lines_in_order = list(dict.fromkeys(r["line"] for r in rows))
+    targets = [t for t in TARGETS if t > floor]
+    head = "| position error <= | " + " | ".join(lines_in_order) + " |"
+    lines = [head, "|---|" + "---|" * len(lines_in_order)]
+    for target in targets:
+        best = fastest(rows, target)
+        cells = [f"{best[n]['wall_s']:.3g} s" if n in best else "-" for n in lines_in_order]
+        if best:
+            winner = min(best, key=lambda n: best[n]["wall_s"])
+            cells = [f"**{c}**" if n == winner else c for n, c in zip(lines_in_order, cells)]
+        lines.append(f"| {target:.0e} AU | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def plot(results, path):
+    """Work-precision diagram: position error and largest energy error against wall time."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [r for r in results.rows if r["status"] == "ok"]
+    lines_in_order = list(dict.fromkeys(r["line"] for r in rows))
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8))
+    styles = {"pfvi": "-", "ias15": "--", "whfast": ":", "leapfrog": "-.", "bs": (0, (5, 1, 1, 1))}
+    markers = "osD^v<>ph*"
+    floor = 1e-17  # exact zeros (WHFast's energy on two bodies) are drawn at the floor
+    for k, name in enumerate(lines_in_order):
+        sel = sorted((r for r in rows if r["line"] == name), key=lambda r: r["wall_s"])
+        family = sel[0]["family"]
+        for ax, key in zip(axes, ("position_error", "energy_error_max")):
+            ax.loglog([r["wall_s"] for r in sel], [max(r[key], floor) for r in sel], linestyle=styles[family],
+                      marker=markers[k % len(markers)], label=name, mfc="none" if family != "pfvi" else None)
+    axes[0].set_ylabel("position error at t_end [AU]")
+    axes[1].set_ylabel("largest relative energy error")
+    for ax in axes:
+        ax.set_xlabel("wall time [s] (best of %d)" % results.repeats)
+        ax.grid(True, which="both", alpha=0.3)
+    axes[1].legend(fontsize=7, ncol=2)
+    fig.suptitle(results.scene.describe(), fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def machine():
+    import rebound
+
+    return {"python": platform.python_version(), "rebound": rebound.__version__, "machine": platform.machine(),
+            "cores": os.cpu_count()}
+
+
+def write(results, output, basename=None, command=None):
+    """Writes <basename>.json, .csv, .md and .png (if matplotlib is installed)
+    into `output`; returns the paths written."""
+    os.makedirs(output, exist_ok=True)
+    base = os.path.join(output, basename or results.scene.name)
+    data = results.to_dict()
+    data["machine"] = machine()
+    data["command"] = command
+    paths = {}
+    with open(base + ".json", "w") as f:
+        json.dump(data, f, indent=1)
+    paths["json"] = base + ".json"
+    with open(base + ".csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=("scene", "family", "options") + COLUMNS, extrasaction="ignore")
+        writer.writeheader()
+        for r in results.rows:
+            writer.writerow({**r, "options": json.dumps(r["options"])})
+    paths["csv"] = base + ".csv"
+    png_note = ""
+    try:
+        plot(results, base + ".png")
+        paths["png"] = base + ".png"
+    except ImportError:
+        png_note = "\n(No plot: matplotlib is not installed; pip install 'rebound_pfvi[plot]'.)\n"
+    m = data["machine"]
+    status = (f"**Interrupted**: {results.finished} of {len(results.settings)} runs finished.\n\n"
+              if results.interrupted else "")
+    floor = results.reference.get("uncertainty", 0.0)
+    text = f"""# {results.scene.describe()}
+
+{status}Generated by `{command or 'rebound_pfvi.compare.run'}` on {m['cores']} cores (Python {m['python']},
+rebound {m['rebound']}); the sweep took {results.wall_s:.1f} s with {results.workers} worker(s)
+({results.scheduler}). Wall times are the best of {results.repeats} repeats, with the runs of the sweep
+sharing the machine's cores: compare them within this page only.
+
+Reference: {results.reference['how']}; its uncertainty: {floor:.1e} AU. Energy: the largest relative
+error over {results.samples} evenly spaced times (an untimed rerun, which also counts force evaluations
+through a callback in additional_forces), and the final one. Position error: the largest distance of a
+particle from its reference position at t_end (Kepler: of the relative position).
+
+## Fastest run of each integrator that reaches a position error
+
+{summary_table(results.rows, floor)}
+
+![work-precision diagram]({os.path.basename(base)}.png)
+{png_note}
+## Every run
+
+{markdown_table(results.rows)}
+"""
+    with open(base + ".md", "w") as f:
+        f.write(text)
+    paths["md"] = base + ".md"
+    return paths

@@ -1,0 +1,368 @@
+"""Scenes: small declarative test problems for comparing integrators.
+
+A scene is a picklable description (numbers only, in the units of
+:mod:`rebound_pfvi.units`: AU, yr, Msun, with REBOUND's G) that can
+
+- ``build()`` a fresh ``rebound.Simulation`` at t = 0, with any additional
+  forces installed (callbacks do not survive pickling or ``sim.copy()``, so
+  every process builds its own);
+- give ``t_end`` and ``period`` (the time scale that fixed steps are counted
+  against);
+- compute its ``reference()`` at t_end once, in the parent process, and the
+  diagnostics of a finished run: ``energy(sim)`` and
+  ``position_error(sim, reference)``.
+
+Constructors accept astropy Quantities (or strings such as "1 AU") and plain
+numbers, which are taken in AU, yr and Msun; the ``*_quantity`` accessors
+return Quantities. Which integrator families apply is part of the scene
+(WHFast needs a dominant central body).
+"""
+import functools
+import math
+from dataclasses import asdict, dataclass
+
+from . import units
+
+#: Integrator families every gravitational scene can use.
+GRAVITY_FAMILIES = ("pfvi", "ias15", "whfast", "leapfrog", "bs")
+#: IAS15's epsilon for references computed by integration, and the looser
+#: epsilon whose difference from it is reported as the reference's uncertainty.
+REFERENCE_EPSILON = 1e-11
+REFERENCE_CHECK_EPSILON = 1e-10
+
+
+def _new_simulation():
+    import rebound
+
+    import rebound_pfvi  # noqa: F401  (registers "pfvi" in this process)
+
+    sim = rebound.Simulation()
+    sim.units = units.REBOUND_UNITS
+    return sim
+
+
+@functools.lru_cache(maxsize=None)
+def rebound_G():
+    """G in AU^3 / (Msun yr^2), as REBOUND sets it: the one G of every scene."""
+    return _new_simulation().G
+
+
+def _positions(sim):
+    return [(p.x, p.y, p.z) for p in sim.particles]
+
+
+class Scene:
+    """Base class: subclasses are dataclasses of unitless numbers."""
+
+    name = "scene"
+    families = GRAVITY_FAMILIES
+    #: pfvi frequency options worth sweeping in this scene.
+    pfvi_frequencies = ("curvature",)
+    #: True if build(counter=...) counts its own force evaluations.
+    counts_own_forces = False
+
+    @property
+    def params(self):
+        return asdict(self)
+
+    def build(self, counter=None):
+        raise NotImplementedError
+
+    @property
+    def period(self):
+        raise NotImplementedError
+
+    @property
+    def t_end(self):
+        return self.periods * self.period
+
+    def energy(self, sim):
+        return sim.energy()
+
+    def describe(self):
+        raise NotImplementedError
+
+    def configure_pfvi(self, sim, frequency):
+        """Scene-specific pfvi options (the oscillator's known frequency)."""
+        sim.integrator.frequency = frequency
+
+    # References integrated with IAS15, for scenes without a closed form.
+    def reference(self):
+        """Positions of every particle at t_end, and an estimate of their error."""
+        best = self._ias15_positions(REFERENCE_EPSILON)
+        check = self._ias15_positions(REFERENCE_CHECK_EPSILON)
+        uncertainty = max(math.dist(a, b) for a, b in zip(best, check))
+        return {"positions": best, "uncertainty": uncertainty,
+                "how": f"IAS15, epsilon {REFERENCE_EPSILON:g} (uncertainty: distance to the run at "
+                       f"epsilon {REFERENCE_CHECK_EPSILON:g})"}
+
+    def _ias15_positions(self, epsilon):
+        sim = self.build()
+        sim.integrator = "ias15"
+        sim.integrator.epsilon = epsilon
+        sim.integrate(self.t_end, exact_finish_time=1)
+        return _positions(sim)
+
+    def position_error(self, sim, reference):
+        """Largest distance of a particle from its reference position at t_end."""
+        return max(math.dist(p, q) for p, q in zip(_positions(sim), reference["positions"]))
+
+    def period_quantity(self):
+        return units.to_quantity(self.period, "time")
+
+    def t_end_quantity(self):
+        return units.to_quantity(self.t_end, "time")
+
+
+@dataclass
+class Kepler(Scene):
+    """Two bodies on a Kepler orbit, in the centre-of-mass frame, from pericentre.
+
+    The reference is exact: the orbit's elements at t = 0 from REBOUND
+    (``Particle.orbit``), the mean anomaly advanced by n t, and the relative
+    position at t from REBOUND's elements-to-Cartesian conversion. The
+    position error is that of the relative position (body 1 about body 0).
+    """
+
+    e: float = 0.95
+    periods: float = 100.0
+    a: float = 1.0  # AU
+    mass: float = 1.0  # Msun, the central body
+    m: float = 1e-3  # Msun, the orbiter (about a Jupiter mass)
+
+    name = "kepler"
+
+    def __init__(self, e=0.95, periods=100.0, a=1.0, mass=1.0, m=1e-3):
+        self.e = _number(e, "e")
+        if not 0.0 <= self.e < 1.0:
+            raise ValueError(f"e={e!r} is not a bound eccentricity; allowed: 0 <= e < 1")
+        self.periods = _positive(_number(periods, "periods"), "periods")
+        self.a = _positive(units.to_scene(a, "length", "a"), "a")
+        self.mass = _positive(units.to_scene(mass, "mass", "mass"), "mass")
+        self.m = units.to_scene(m, "mass", "m")
+        if self.m < 0.0:
+            raise ValueError(f"m={m!r} is negative; the orbiter's mass must be >= 0")
+
+    def build(self, counter=None):
+        sim = _new_simulation()
+        sim.add(m=self.mass)
+        sim.add(m=self.m, a=self.a, e=self.e)
+        sim.move_to_com()
+        return sim
+
+    @property
+    def period(self):
+        return 2.0 * math.pi * math.sqrt(self.a**3 / (rebound_G() * (self.mass + self.m)))
+
+    def reference(self):
+        return {"elements": self._elements(), "uncertainty": 0.0,
+                "how": "exact: REBOUND's orbital elements at t = 0, mean anomaly advanced by n t"}
+
+    def _elements(self):
+        sim = self.build()
+        o = sim.particles[1].orbit(primary=sim.particles[0])
+        return dict(a=o.a, e=o.e, inc=o.inc, Omega=o.Omega, omega=o.omega, M=o.M, n=o.n)
+
+    def exact_relative_position(self, t, elements=None):
+        """Position of body 1 relative to body 0 at time t, from REBOUND's elements."""
+        el = elements or self._elements()
+        ref = _new_simulation()
+        ref.add(m=self.mass)
+        ref.add(m=self.m, a=el["a"], e=el["e"], inc=el["inc"], Omega=el["Omega"], omega=el["omega"],
+                M=el["M"] + el["n"] * t, primary=ref.particles[0])
+        d = ref.particles[1] - ref.particles[0]
+        return d.x, d.y, d.z
+
+    def position_error(self, sim, reference):
+        d = sim.particles[1] - sim.particles[0]
+        return math.dist((d.x, d.y, d.z), self.exact_relative_position(sim.t, reference["elements"]))
+
+    def describe(self):
+        return (f"Kepler: e = {self.e:g}, a = {self.a:g} AU, central mass {self.mass:g} Msun, orbiter "
+                f"{self.m:g} Msun, centre-of-mass frame, {self.periods:g} periods")
+
+
+@dataclass
+class Comet(Scene):
+    """The Sun, Jupiter and a massless comet of eccentricity e (default 0.95).
+
+    WHFast is exact on a pure two-body problem, so this is the fair Kepler
+    comparison: the comet's orbit is perturbed by Jupiter. The comet starts at
+    pericentre q = a (1 - e) with inclination 20 degrees; the reference is
+    IAS15 at a tight tolerance.
+    """
+
+    e: float = 0.95
+    a: float = 10.0  # AU: q = 0.5 AU, aphelion 19.5 AU, crossing Jupiter's orbit
+    periods: float = 3.0  # of the comet
+
+    name = "comet"
+
+    def __init__(self, e=0.95, a=10.0, periods=3.0):
+        self.e = _number(e, "e")
+        if not 0.0 <= self.e < 1.0:
+            raise ValueError(f"e={e!r} is not a bound eccentricity; allowed: 0 <= e < 1")
+        self.a = _positive(units.to_scene(a, "length", "a"), "a")
+        self.periods = _positive(_number(periods, "periods"), "periods")
+
+    def build(self, counter=None):
+        sim = _new_simulation()
+        sim.add(m=1.0)
+        # Jupiter's mass as the nominal GM ratio, its mean elements (J2000, rounded).
+        sim.add(m=9.545942339693249e-4, a=5.2026, e=0.0484, inc=math.radians(1.304),
+                Omega=math.radians(100.46), omega=math.radians(273.87), M=math.radians(20.0))
+        sim.add(m=0.0, a=self.a, e=self.e, inc=math.radians(20.0), Omega=math.radians(40.0),
+                omega=math.radians(110.0), M=0.0, primary=sim.particles[0])
+        sim.move_to_com()
+        return sim
+
+    @property
+    def period(self):
+        return 2.0 * math.pi * math.sqrt(self.a**3 / rebound_G())
+
+    def describe(self):
+        return (f"Comet: Sun, Jupiter and a massless comet, e = {self.e:g}, a = {self.a:g} AU "
+                f"(pericentre {self.a * (1 - self.e):g} AU), inclination 20 deg, {self.periods:g} comet periods")
+
+
+@dataclass
+class Triple(Scene):
+    """A hierarchical triple: an eccentric inner binary and a distant, inclined companion."""
+
+    e: float = 0.7  # inner binary
+    a_inner: float = 1.0  # AU
+    a_outer: float = 10.0  # AU
+    periods: float = 3.0  # of the outer orbit
+
+    name = "triple"
+
+    def __init__(self, e=0.7, a_inner=1.0, a_outer=10.0, periods=3.0):
+        self.e = _number(e, "e")
+        if not 0.0 <= self.e < 1.0:
+            raise ValueError(f"e={e!r} is not a bound eccentricity; allowed: 0 <= e < 1")
+        self.a_inner = _positive(units.to_scene(a_inner, "length", "a_inner"), "a_inner")
+        self.a_outer = _positive(units.to_scene(a_outer, "length", "a_outer"), "a_outer")
+        if self.a_outer <= 3.0 * self.a_inner:
+            raise ValueError(f"a_outer={a_outer} must exceed 3 a_inner for a hierarchical triple")
+        self.periods = _positive(_number(periods, "periods"), "periods")
+
+    def build(self, counter=None):
+        sim = _new_simulation()
+        sim.add(m=1.0)
+        sim.add(m=0.5, a=self.a_inner, e=self.e)
+        sim.add(m=0.3, a=self.a_outer, e=0.2, inc=math.radians(30.0), omega=math.radians(60.0))
+        sim.move_to_com()
+        return sim
+
+    @property
+    def period(self):
+        """The inner binary's period: the time scale fixed steps must resolve."""
+        return 2.0 * math.pi * math.sqrt(self.a_inner**3 / (rebound_G() * 1.5))
+
+    @property
+    def t_end(self):
+        outer = 2.0 * math.pi * math.sqrt(self.a_outer**3 / (rebound_G() * 1.8))
+        return self.periods * outer
+
+    def describe(self):
+        return (f"Hierarchical triple: 1 + 0.5 Msun binary, a = {self.a_inner:g} AU, e = {self.e:g}; "
+                f"0.3 Msun companion at a = {self.a_outer:g} AU, e = 0.2, inclined 30 deg; "
+                f"{self.periods:g} outer periods")
+
+
+@dataclass
+class Oscillator(Scene):
+    """The 2-D isotropic harmonic oscillator x'' = -omega^2 x (gravity off).
+
+    The force comes through ``additional_forces`` (a Python callback, which
+    dominates every integrator's wall time here: compare force evaluations).
+    The orbit is an ellipse with semi-axes `amplitude` and `amplitude`/2;
+    the reference is exact. pfvi is run both with its curvature frequency and
+    with the known omega (frequency "fixed"), the case the seed's fitting is
+    exact for. WHFast does not apply (no central body).
+    """
+
+    omega: float = 2.0 * math.pi  # 1/yr
+    amplitude: float = 1.0  # AU
+    periods: float = 100.0
+
+    name = "oscillator"
+    families = ("pfvi", "ias15", "leapfrog", "bs")
+    pfvi_frequencies = ("curvature", "fixed")
+    counts_own_forces = True
+
+    def __init__(self, omega=2.0 * math.pi, amplitude=1.0, periods=100.0):
+        self.omega = _positive(units.to_scene(omega, "frequency", "omega"), "omega")
+        self.amplitude = _positive(units.to_scene(amplitude, "length", "amplitude"), "amplitude")
+        self.periods = _positive(_number(periods, "periods"), "periods")
+
+    def build(self, counter=None):
+        sim = _new_simulation()
+        sim.gravity = "none"
+        sim.add(m=1.0, x=self.amplitude, vy=0.5 * self.omega * self.amplitude)
+        w2 = self.omega * self.omega
+
+        def spring(simp):
+            if counter is not None:
+                counter[0] += 1
+            p = simp.contents.particles[0]
+            p.ax = -w2 * p.x
+            p.ay = -w2 * p.y
+            p.az = -w2 * p.z
+
+        sim.additional_forces = spring  # REBOUND keeps the ctypes callback alive
+        return sim
+
+    @property
+    def period(self):
+        return 2.0 * math.pi / self.omega
+
+    def energy(self, sim):
+        p = sim.particles[0]
+        return 0.5 * (p.vx**2 + p.vy**2 + p.vz**2) + 0.5 * self.omega**2 * (p.x**2 + p.y**2 + p.z**2)
+
+    def configure_pfvi(self, sim, frequency):
+        sim.integrator.frequency = frequency
+        if frequency == "fixed":
+            sim.integrator.omega = self.omega
+
+    def reference(self):
+        return {"uncertainty": 0.0, "how": "exact: x = A cos(omega t), y = (A/2) sin(omega t)"}
+
+    def position_error(self, sim, reference):
+        p = sim.particles[0]
+        phase = self.omega * sim.t
+        exact = (self.amplitude * math.cos(phase), 0.5 * self.amplitude * math.sin(phase), 0.0)
+        return math.dist((p.x, p.y, p.z), exact)
+
+    def describe(self):
+        return (f"Harmonic oscillator: omega = {self.omega:g} /yr, ellipse {self.amplitude:g} x "
+                f"{self.amplitude / 2:g} AU, {self.periods:g} periods")
+
+
+SCENES = {cls.name: cls for cls in (Kepler, Comet, Triple, Oscillator)}
+
+
+def make(name, **params):
+    """A scene by name, e.g. ``make("kepler", e=0.9, a="2 AU")``."""
+    if name not in SCENES:
+        raise ValueError(f"scene={name!r} is not a scene; allowed: {', '.join(SCENES)}")
+    return SCENES[name](**params)
+
+
+def _number(value, name):
+    if isinstance(value, bool):
+        raise ValueError(f"{name}={value!r} is not a number")
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}={value!r} is not a number") from None
+    if not math.isfinite(number):
+        raise ValueError(f"{name}={value!r} is not finite")
+    return number
+
+
+def _positive(number, name):
+    if not number > 0.0:
+        raise ValueError(f"{name}={number!r} must be positive")
+    return number

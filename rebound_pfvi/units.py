@@ -1,0 +1,95 @@
+"""Units at the public boundary; the core and the scenes' numbers stay unitless.
+
+Every scene runs in one unit system, REBOUND's ``sim.units = ("AU", "yr",
+"Msun")``. Its G is the only G in rebound_pfvi: REBOUND computes it (39.4769264
+AU^3 / (Msun yr^2), i.e. the IAU nominal GM_sun) and nothing here takes G from
+astropy. astropy only converts user Quantities into AU, yr and Msun and back
+(``.to_value(unit)`` in, ``<< unit`` out), so ratios of masses given in Msun,
+Mjup or Mearth carry the nominal GM ratios and no G at all. A mass given in kg
+goes through astropy's M_sun, which is GM_sun / G(CODATA 2018); REBOUND's own
+G_SI is CODATA 2014 (6.67408e-11 against 6.67430e-11): that is why nothing
+here builds a simulation in SI units.
+
+astropy is imported on first use, so that ``import rebound_pfvi`` and the
+integrator never need it.
+"""
+import math
+
+#: The unit system of every scene, as REBOUND's ``sim.units`` names it.
+REBOUND_UNITS = ("AU", "yr", "Msun")
+#: The same units, as astropy names them; a value's dimension picks one.
+_ASTROPY_NAMES = {"length": "AU", "time": "yr", "mass": "solMass"}
+#: Units with which a dimension may be given on the command line or in Python.
+ALLOWED = {
+    "length": ("AU", "km", "m", "pc", "Rsun", "Rjup", "Rearth"),
+    "time": ("yr", "day", "d", "s", "h"),
+    "mass": ("Msun", "Mjup", "Mearth", "kg"),
+    "frequency": ("1/yr", "1/day", "1/s", "rad/yr", "rad/day", "rad/s"),
+}
+
+
+def _u():
+    import astropy.units as u
+
+    return u
+
+
+def scene_unit(kind):
+    """The astropy unit of a scene's numbers of one kind: length, time, mass,
+    frequency (1/yr), speed (AU/yr) or energy per mass (AU^2/yr^2)."""
+    u = _u()
+    if kind in _ASTROPY_NAMES:
+        return u.Unit(_ASTROPY_NAMES[kind])
+    derived = {"frequency": u.yr**-1, "speed": u.AU / u.yr, "specific_energy": (u.AU / u.yr)**2}
+    if kind not in derived:
+        raise ValueError(f"kind={kind!r} is not a unit kind; allowed: "
+                         f"{', '.join(list(_ASTROPY_NAMES) + list(derived))}")
+    return derived[kind]
+
+
+def parse(text, kind, name):
+    """A Quantity from a string such as "1 AU" or "0.3 Mjup" (the command line).
+
+    `name` is the argument's name, used in the error when the text is not a
+    number with a unit of the right kind."""
+    u = _u()
+    try:
+        value = u.Quantity(text)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{name}: cannot read {text!r} as a quantity ({error}); "
+                         f"write a number and a unit, e.g. \"1 {ALLOWED[kind][0]}\" "
+                         f"(units: {', '.join(ALLOWED[kind])})") from None
+    return value
+
+
+def to_scene(value, kind, name):
+    """A float in the scene's unit of `kind` from a Quantity, or a plain number
+    taken to be in that unit already. `name` names the argument in errors."""
+    if isinstance(value, bool):
+        raise ValueError(f"{name}={value!r} is not a number")
+    if isinstance(value, str):
+        value = parse(value, kind, name)
+    if hasattr(value, "unit"):
+        u = _u()
+        unit = scene_unit(kind)
+        try:
+            # Frequencies may be given in rad/time; radians are dimensionless here.
+            number = value.to_value(unit, equivalencies=u.dimensionless_angles())
+        except u.UnitConversionError:
+            raise ValueError(f"{name}={value} has unit {value.unit}, which is not a {kind}; "
+                             f"allowed: {', '.join(ALLOWED.get(kind, (str(unit),)))}") from None
+        number = float(number)
+    else:
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name}={value!r} is neither a number nor a Quantity") from None
+    if not math.isfinite(number):
+        raise ValueError(f"{name}={value!r} is not finite")
+    return number
+
+
+def to_quantity(number, kind, unit=None):
+    """A scene number as a Quantity, in the scene unit or converted to `unit`."""
+    q = number * scene_unit(kind)
+    return q if unit is None else q.to(unit)
