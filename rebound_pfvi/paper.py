@@ -382,9 +382,9 @@ at the same time.
 rapidly at pericentre.
 
 **Measured:** omega ranges from {min(omegas):.3g} to {max(omegas):.3g}
-(mean motion n = 1 in these units; at pericentre omega = n sqrt(1+e)/(1-e)^(3/2)
-= {math.sqrt(1 + e) / (1 - e)**1.5:.4g}, at apocentre n sqrt(1-e)/(1+e)^(3/2) =
-{math.sqrt(1 - e) / (1 + e)**1.5:.4g}); largest relative difference from the
+(mean motion n = 1 in these units; the radius of curvature at both vertices
+is a (1 - e^2), so omega = n / (sqrt(1+e) (1-e)^(3/2)) = {1 / (math.sqrt(1 + e) * (1 - e)**1.5):.4g}
+at pericentre and n / (sqrt(1-e) (1+e)^(3/2)) = {1 / (math.sqrt(1 - e) * (1 + e)**1.5):.4g} at apocentre); largest relative difference from the
 exact orbit's value {worst:.1e}. The steps crowd at pericentre, where omega
 peaks: {sum(1 for w in omegas if w > 0.5 * max(omegas))} of {len(omegas)} steps
 have omega above half its peak.

@@ -21,4 +21,5 @@ def test_demo_rows_and_errors():
 def test_cli_rejects_bad_orbits(capsys):
     with pytest.raises(SystemExit):
         main(["demo", "--orbits", "0"])
-    assert "--orbits must be a positive integer, got 0" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "argument --orbits: 0 must be at least 1" in err, err

@@ -1,0 +1,224 @@
+"""Scenes, the comparison runner, its reports and the compare CLI (issue 5)."""
+import json
+import math
+
+import pytest
+
+from rebound_pfvi import compare, report, scenes
+from rebound_pfvi.__main__ import main
+
+
+@pytest.mark.parametrize("e", [0.0, 0.5, 0.9, 0.95, 0.99])
+def test_kepler_reference_agrees_with_tight_ias15(e):
+    """The exact reference (REBOUND's elements, M + n t) and IAS15 agree to 1e-10 AU over 10 orbits."""
+    scene = scenes.Kepler(e=e, periods=10)
+    sim = scene.build()
+    sim.integrator = "ias15"
+    sim.integrator.epsilon = 1e-11
+    sim.integrate(scene.t_end)
+    error = scene.position_error(sim, scene.reference())
+    assert error < 1e-10, error
+
+
+@pytest.mark.parametrize("name", ["comet", "triple"])
+def test_integrated_references_are_converged(name):
+    """IAS15 at epsilon 1e-11 and 1e-10 agree to 1e-9 AU: the reference's stated uncertainty."""
+    scene = scenes.make(name, periods=1)
+    reference = scene.reference()
+    assert 0.0 < reference["uncertainty"] < 1e-9, reference["uncertainty"]
+    assert len(reference["positions"]) == scene.build().N
+
+
+def test_oscillator_with_known_omega_is_exact_for_fitted_two_point_scheme():
+    """The seed's exact case, through the runner: s = 2, "phase", fixed omega."""
+    scene = scenes.Oscillator(periods=20)
+    setting = compare.Setting("pfvi", 1e-6, (("stages", 2), ("fitting", "phase"), ("frequency", "fixed")))
+    row = compare.run_setting(scene, setting, scene.reference(), repeats=1, samples=5)
+    assert row["status"] == "ok"
+    assert row["position_error"] < 1e-12
+    assert row["energy_error_max"] < 1e-13
+    classical = compare.run_setting(scene, compare.Setting("pfvi", 1e-6, (("stages", 2), ("fitting", "none"))),
+                                    scene.reference(), repeats=1, samples=5)
+    assert classical["position_error"] > 1e3 * row["position_error"]
+    # Forces are counted by the scene's own callback: one per step plus the first.
+    assert row["force_evaluations"] >= row["steps"]
+
+
+@pytest.mark.parametrize("family,value", [("pfvi", 1e-6), ("ias15", 1e-7), ("whfast", 100), ("leapfrog", 1000),
+                                          ("bs", 1e-8)])
+def test_counting_callback_leaves_the_run_bit_identical(family, value):
+    scene = scenes.Comet(periods=0.2)
+    setting = compare.Setting(family, value)
+    plain = scene.build()
+    compare.configure(plain, scene, setting)
+    plain.integrate(scene.t_end)
+    counter = [0]
+    counted = scene.build(counter=counter)
+    compare._install_counter(counted, scene, counter)
+    compare.configure(counted, scene, setting)
+    counted.integrate(scene.t_end)
+    assert counter[0] >= plain.steps_done > 0
+    state = [[(p.x, p.y, p.z, p.vx, p.vy, p.vz) for p in sim.particles] for sim in (counted, plain)]
+    assert state[0] == state[1]  # exactly: the callback adds nothing and changes no step
+    assert counted.t == plain.t
+
+
+def _without_timing(rows):
+    return [{k: v for k, v in r.items() if k not in ("wall_s", "walls_s")} for r in rows]
+
+
+SMALL_SWEEP = [compare.Setting("pfvi", 1e-6), compare.Setting("pfvi", 1e-5, (("stages", 2), ("fitting", "none"))),
+               compare.Setting("ias15", 1e-7), compare.Setting("whfast", 100), compare.Setting("leapfrog", 1000),
+               compare.Setting("bs", 1e-8)]
+
+
+def test_same_numbers_in_process_local_pool_and_dask():
+    from distributed import Client, LocalCluster
+
+    scene = scenes.Kepler(e=0.9, periods=2)
+    here = compare.run(scene, SMALL_SWEEP, repeats=1, samples=5, workers=1)
+    pool = compare.run(scene, SMALL_SWEEP, repeats=1, samples=5, workers=2)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        dask = compare.run(scene, SMALL_SWEEP, repeats=1, samples=5, scheduler=client)
+    assert all(r["status"] == "ok" for r in here.rows)
+    assert _without_timing(here.rows) == _without_timing(pool.rows) == _without_timing(dask.rows)
+    assert (here.scheduler, pool.scheduler) == ("this process", "local pool")
+    assert dask.scheduler.startswith("dask ") and dask.workers == 2
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_ctrl_c_stops_and_keeps_finished_runs(tmp_path, workers):
+    scene = scenes.Kepler(e=0.5, periods=1)
+    seen = []
+
+    def progress(done, total, row):
+        seen.append(row)
+        if done == 2:
+            raise KeyboardInterrupt
+
+    results = compare.run(scene, SMALL_SWEEP, repeats=1, samples=3, workers=workers, progress=progress)
+    assert results.interrupted and results.finished == 2 < len(SMALL_SWEEP)
+    assert [r["line"] for r in results.rows] == sorted((r["line"] for r in seen[:2]),
+                                                        key=[s.line for s in SMALL_SWEEP].index)
+    paths = report.write(results, str(tmp_path))
+    text = (tmp_path / "kepler.md").read_text()
+    assert "Interrupted" in text and "2 of 6 runs" in text
+    assert json.loads((tmp_path / "kepler.json").read_text())["interrupted"] is True
+    assert set(paths) == {"json", "csv", "md", "png"}
+
+
+def test_quick_cli_run_writes_table_data_and_png_with_every_integrator(tmp_path, capsys):
+    out = tmp_path / "results"
+    code = main(["compare", "--e", "0.9", "--periods", "2", "--repeats", "1", "--samples", "4", "--workers", "1",
+                 "--output", str(out)])
+    assert code == 0
+    data = json.loads((out / "kepler.json").read_text())
+    assert data["finished"] == data["settings"] == len(compare.default_settings(scenes.Kepler()))
+    families = {r["family"] for r in data["rows"] if r["status"] == "ok"}
+    assert families == set(compare.FAMILIES)
+    table = (out / "kepler.md").read_text()
+    for label in ("pfvi s=2 phase", "pfvi s=4 none", "IAS15", "WHFast", "LEAPFROG", "BS"):
+        assert f"| {label} |" in table
+    png = (out / "kepler.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20000
+    assert len((out / "kepler.csv").read_text().splitlines()) == data["settings"] + 1
+    assert "Fastest to a position error" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv,words", [
+    (["compare", "--a", "1 kg"], ["--a", "length"]),
+    (["compare", "--a", "lots"], ["--a", "quantity"]),
+    (["compare", "--mass", "2 AU"], ["--mass", "mass"]),
+    (["compare", "--omega", "1 1/yr"], ["--omega", "oscillator"]),
+    (["compare", "--scene", "oscillator", "--e", "0.5"], ["--e", "kepler"]),
+    (["compare", "--e", "1.5"], ["e=1.5", "0 <= e < 1"]),
+    (["compare", "--integrators", "ias15,rk4"], ["--integrators", "rk4", "whfast"]),
+    (["compare", "--scene", "oscillator", "--integrators", "whfast"], ["--integrators", "whfast", "oscillator"]),
+    (["compare", "--repeats", "0"], ["--repeats", "at least 1"]),
+    (["compare", "--scene", "moon"], ["--scene", "kepler"]),
+    (["compare", "--periods", "-3"], ["periods", "positive"]),
+    (["paper", "fig4"], ["figure", "fig2"]),
+])
+def test_argument_errors_name_the_argument(argv, words, capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    for word in words:
+        assert word in err, (word, err)
+
+
+def test_unit_round_trip_and_one_g():
+    import astropy.constants as const
+    import astropy.units as u
+    import rebound
+
+    from rebound_pfvi import units
+
+    for value in (1.3 * u.AU, 2.5e8 * u.km, 4.0 * u.pc, 0.7 * u.Msun, 3.0 * u.Mjup, 2.0e27 * u.kg, 5.0 * u.Mearth):
+        kind = "length" if value.unit.physical_type == "length" else "mass"
+        back = units.to_quantity(units.to_scene(value, kind, "x"), kind, value.unit)
+        assert abs((back / value).decompose().value - 1.0) < 1e-15
+    for value in (3.0 * u.day, 2.0 * u.yr, 1e6 * u.s):
+        back = units.to_quantity(units.to_scene(value, "time", "t"), "time", value.unit)
+        assert abs((back / value).decompose().value - 1.0) < 1e-15
+    # Strings and Quantities give the same scene.
+    from_strings = scenes.Kepler(a="149597870.7 km", m="1 Mjup").params
+    assert from_strings == pytest.approx(scenes.Kepler(a=1.0 * u.AU, m=1 * u.Mjup).params, rel=1e-15)
+    assert scenes.Kepler(m=1 * u.Mjup).m == pytest.approx(float(u.Mjup.to(u.Msun)), rel=1e-15)
+    # One G: REBOUND's, which carries the nominal GM_sun in AU, yr, Msun ...
+    G = scenes.rebound_G()
+    sim = rebound.Simulation()
+    sim.units = ("AU", "yr", "Msun")
+    assert G == sim.G
+    gm_sun = (const.GM_sun * u.yr**2 / u.AU**3).decompose().value
+    assert abs(G / gm_sun - 1.0) < 1e-9
+    # ... so a 1 AU orbit about 1 Msun has the astropy period to 1e-9, in days.
+    scene = scenes.Kepler(a="1 AU", mass="1 Msun", m=0.0)
+    period = scene.period_quantity().to(u.day)
+    expected = (2 * math.pi * ((1 * u.AU)**3 / const.GM_sun)**0.5).to(u.day)
+    assert abs((period / expected).value - 1.0) < 1e-9
+    # REBOUND's G_SI and astropy's G differ (CODATA 2014 and 2018): a second
+    # source of G would show up at this level.
+    assert abs(rebound.units.G_SI / const.G.value - 1.0) > 1e-5
+
+
+def test_scene_errors_name_the_parameter():
+    for make, words in ((lambda: scenes.Kepler(a="1 kg"), ("a=", "length")),
+                        (lambda: scenes.Kepler(e=-0.1), ("e=-0.1",)),
+                        (lambda: scenes.Kepler(m=-1.0), ("m=-1.0",)),
+                        (lambda: scenes.Oscillator(omega="1 AU"), ("omega=", "frequency")),
+                        (lambda: scenes.Triple(a_outer=2.0), ("a_outer",)),
+                        (lambda: scenes.make("moon"), ("moon", "kepler")),
+                        (lambda: compare.Setting("rk4", 1.0), ("rk4", "ias15")),
+                        (lambda: compare.Setting("ias15", -1.0), ("epsilon=-1.0",)),
+                        (lambda: compare.default_settings(scenes.Kepler(), "huge"), ("size='huge'",))):
+        with pytest.raises(ValueError) as error:
+            make()
+        for word in words:
+            assert word in str(error.value)
+
+
+def test_results_table_carries_quantities():
+    import astropy.units as u
+
+    scene = scenes.Kepler(e=0.5, periods=1)
+    results = compare.run(scene, SMALL_SWEEP[2:4], repeats=1, samples=2, workers=1)
+    table = results.table()
+    assert table["wall_time"].unit == u.s and table["position_error"].unit == u.AU
+    assert table["position_error_km"][0].to_value(u.km) == pytest.approx(
+        table["position_error"][0].to_value(u.AU) * 149597870.7, rel=1e-12)
+
+
+def test_figure2_and_figure3_short_runs():
+    from rebound_pfvi import paper
+
+    rows = paper.figure2_rows(e=0.95, periods=5, samples=10)
+    assert len(rows) == 10 and rows[-1]["t_periods"] == pytest.approx(5.0, rel=1e-3)
+    assert max(r["energy_error"] for r in rows) < 1e-5
+    assert [r["steps"] for r in rows] == sorted(r["steps"] for r in rows)
+    rows = paper.figure3_rows(e=0.95, periods=1)
+    peak = 1.0 / (math.sqrt(1.95) * 0.05**1.5)  # v / (a (1 - e^2)) at pericentre, n = 1
+    assert max(r["omega"] for r in rows) == pytest.approx(peak, rel=1e-2)
+    assert max(abs(r["omega"] / r["omega_exact"] - 1.0) for r in rows) < 1e-3
