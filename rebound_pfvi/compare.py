@@ -168,8 +168,9 @@ def run_setting(scene, setting, reference, repeats=3, samples=100):
         _install_counter(sim, scene, counter)
         configure(sim, scene, setting)
         worst = 0.0
+        t0 = sim.t
         for k in range(1, samples):
-            sim.integrate(t_end * k / samples, exact_finish_time=0)
+            sim.integrate(t0 + (t_end - t0) * k / samples, exact_finish_time=0)
             worst = max(worst, abs(scene.energy(sim) / E0 - 1.0))
             if not math.isfinite(worst):
                 break
@@ -217,9 +218,11 @@ class Results:
     def to_dict(self):
         from .units import REBOUND_UNITS
 
+        own = getattr(self.scene, "unit_names", True) is None
+        unit_names = ("the simulation's own",) * 3 if own else REBOUND_UNITS
         return {"scene": self.scene.name, "params": self.scene.params, "description": self.scene.describe(),
                 "t_end": self.scene.t_end, "period": self.scene.period,
-                "units": {"length": REBOUND_UNITS[0], "time": REBOUND_UNITS[1], "mass": REBOUND_UNITS[2],
+                "units": {"length": unit_names[0], "time": unit_names[1], "mass": unit_names[2],
                           "wall_s": "s"},
                 "reference": {k: v for k, v in self.reference.items() if k in ("how", "uncertainty")},
                 "repeats": self.repeats, "samples": self.samples, "workers": self.workers,
@@ -242,8 +245,12 @@ class Results:
         t["wall_time"] = [r["wall_s"] for r in ok] << u.s
         t["energy_error_max"] = [r["energy_error_max"] for r in ok]
         t["energy_error_final"] = [r["energy_error_final"] for r in ok]
-        t["position_error"] = [r["position_error"] for r in ok] << u.AU
-        t["position_error_km"] = t["position_error"].to(u.km)
+        errors = [r["position_error"] for r in ok]
+        if getattr(self.scene, "unit_names", True) is None:  # a custom simulation in its own units
+            t["position_error"] = errors
+        else:
+            t["position_error"] = errors << u.AU
+            t["position_error_km"] = t["position_error"].to(u.km)
         return t
 
 

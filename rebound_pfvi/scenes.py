@@ -82,6 +82,11 @@ class Scene:
     def describe(self):
         raise NotImplementedError
 
+    @property
+    def slug(self):
+        """A file name for this scene's results, e.g. kepler-e0.95."""
+        return f"{self.name}-e{self.e:g}" if hasattr(self, "e") else self.name
+
     def configure_pfvi(self, sim, frequency):
         """Scene-specific pfvi options (the oscillator's known frequency)."""
         sim.integrator.frequency = frequency
@@ -338,6 +343,92 @@ class Oscillator(Scene):
     def describe(self):
         return (f"Harmonic oscillator: omega = {self.omega:g} /yr, ellipse {self.amplitude:g} x "
                 f"{self.amplitude / 2:g} AU, {self.periods:g} periods")
+
+
+class Custom(Scene):
+    """Your own REBOUND simulation as a scene, in its own units.
+
+    ``Custom(sim, duration)`` runs from the simulation's current state for
+    `duration` (in the simulation's time unit, or a Quantity if ``sim.units``
+    is set); the reference is IAS15 at a tight tolerance, the energy is
+    ``sim.energy()``. `period` is the time scale that fixed steps are counted
+    against: by default the shortest period of the bound orbits in
+    ``sim.orbits()``. The simulation is copied (pickled) when the scene is
+    made, so later changes to `sim` do not enter. Python callbacks
+    (``additional_forces``) cannot be copied to worker processes and are
+    refused.
+    """
+
+    name = "custom"
+
+    def __init__(self, sim, duration, period=None, label="custom"):
+        import pickle
+
+        if sim.N < 1:
+            raise ValueError("sim: the simulation has no particles")
+        if sim.N_var:
+            raise ValueError("sim: variational particles are not supported by the comparison")
+        if bool(sim._additional_forces):
+            raise ValueError("sim: additional_forces is set; Python callbacks cannot be copied into worker "
+                             "processes (write a Scene subclass that installs them in build())")
+        self.unit_names = _sim_units(sim)
+        kind_ok = self.unit_names is not None
+        self.duration = _positive(units.to_scene(duration, "time", "duration") if kind_ok and hasattr(duration, "unit")
+                                  else _plain(duration, "duration"), "duration")
+        if period is None:
+            periods = [o.P for o in sim.orbits() if o.a > 0 and math.isfinite(o.P)] if sim.N > 1 else []
+            if not periods:
+                raise ValueError("period: the simulation has no bound orbit; give period= explicitly")
+            period = min(periods)
+        self.period_value = _positive(units.to_scene(period, "time", "period") if kind_ok and hasattr(period, "unit")
+                                      else _plain(period, "period"), "period")
+        self.label = str(label)
+        self.t_start = float(sim.t)
+        self._state = pickle.dumps(sim)
+
+    @property
+    def params(self):
+        return {"label": self.label, "duration": self.duration, "period": self.period_value, "N": self.build().N}
+
+    @property
+    def slug(self):
+        return self.label
+
+    def build(self, counter=None):
+        import pickle
+
+        import rebound_pfvi  # noqa: F401  (registers "pfvi" in this process)
+
+        return pickle.loads(self._state)
+
+    @property
+    def period(self):
+        return self.period_value
+
+    @property
+    def t_end(self):
+        return self.t_start + self.duration
+
+    def describe(self):
+        sim = self.build()
+        return (f"{self.label}: your simulation, N = {sim.N}, from t = {self.t_start:g} for {self.duration:g}"
+                f" (shortest period {self.period_value:g}){'' if self.unit_names else ', in its own units'}")
+
+
+def _sim_units(sim):
+    """REBOUND_UNITS if the simulation was set up in AU, yr, Msun, else None."""
+    u = sim.units
+    return REBOUND_UNITS_LOWER if (u["length"], u["time"], u["mass"]) == REBOUND_UNITS_LOWER else None
+
+
+REBOUND_UNITS_LOWER = ("au", "yr", "msun")
+
+
+def _plain(value, name):
+    if hasattr(value, "unit"):
+        raise ValueError(f"{name}={value}: this simulation has no units set (sim.units), give a plain number in "
+                         "its time unit; or set sim.units = ('AU', 'yr', 'Msun') before adding particles")
+    return _number(value, name)
 
 
 SCENES = {cls.name: cls for cls in (Kepler, Comet, Triple, Oscillator)}

@@ -102,9 +102,9 @@ def test_ctrl_c_stops_and_keeps_finished_runs(tmp_path, workers):
     assert [r["line"] for r in results.rows] == sorted((r["line"] for r in seen[:2]),
                                                         key=[s.line for s in SMALL_SWEEP].index)
     paths = report.write(results, str(tmp_path))
-    text = (tmp_path / "kepler.md").read_text()
+    text = (tmp_path / "kepler-e0.5.md").read_text()
     assert "Interrupted" in text and "2 of 6 runs" in text
-    assert json.loads((tmp_path / "kepler.json").read_text())["interrupted"] is True
+    assert json.loads((tmp_path / "kepler-e0.5.json").read_text())["interrupted"] is True
     assert set(paths) == {"json", "csv", "md", "png"}
 
 
@@ -113,16 +113,16 @@ def test_quick_cli_run_writes_table_data_and_png_with_every_integrator(tmp_path,
     code = main(["compare", "--e", "0.9", "--periods", "2", "--repeats", "1", "--samples", "4", "--workers", "1",
                  "--output", str(out)])
     assert code == 0
-    data = json.loads((out / "kepler.json").read_text())
+    data = json.loads((out / "kepler-e0.9.json").read_text())
     assert data["finished"] == data["settings"] == len(compare.default_settings(scenes.Kepler()))
     families = {r["family"] for r in data["rows"] if r["status"] == "ok"}
     assert families == set(compare.FAMILIES)
-    table = (out / "kepler.md").read_text()
+    table = (out / "kepler-e0.9.md").read_text()
     for label in ("pfvi s=2 phase", "pfvi s=4 none", "IAS15", "WHFast", "LEAPFROG", "BS"):
         assert f"| {label} |" in table
-    png = (out / "kepler.png").read_bytes()
+    png = (out / "kepler-e0.9.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20000
-    assert len((out / "kepler.csv").read_text().splitlines()) == data["settings"] + 1
+    assert len((out / "kepler-e0.9.csv").read_text().splitlines()) == data["settings"] + 1
     assert "Fastest to a position error" in capsys.readouterr().out
 
 
@@ -222,3 +222,46 @@ def test_figure2_and_figure3_short_runs():
     peak = 1.0 / (math.sqrt(1.95) * 0.05**1.5)  # v / (a (1 - e^2)) at pericentre, n = 1
     assert max(r["omega"] for r in rows) == pytest.approx(peak, rel=1e-2)
     assert max(abs(r["omega"] / r["omega_exact"] - 1.0) for r in rows) < 1e-3
+
+
+def test_custom_scene_from_a_users_simulation(tmp_path):
+    """A REBOUND user's own simulation (G = 1 units) goes through the same runner and report."""
+    import rebound
+
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=0.6)
+    sim.add(m=1e-3, a=2.0, e=0.1, inc=0.1)
+    sim.move_to_com()
+    sim.integrate(0.5)  # a start at t != 0
+    scene = scenes.Custom(sim, duration=20.0, label="two-planets")
+    assert scene.period == pytest.approx(min(o.P for o in sim.orbits()))
+    results = compare.run(scene, SMALL_SWEEP, repeats=1, samples=4, workers=1)
+    assert all(r["status"] == "ok" for r in results.rows)
+    assert all(r["t_final"] == pytest.approx(20.5, abs=1e-12) for r in results.rows)
+    ias15 = next(r for r in results.rows if r["family"] == "ias15")
+    assert ias15["position_error"] < 1e-8
+    report.write(results, str(tmp_path))
+    assert "sim. length unit" in (tmp_path / "two-planets.md").read_text()
+    assert results.table()["position_error"].unit is None
+    with pytest.raises(ValueError, match="duration"):
+        scenes.Custom(sim, duration=-1.0)
+
+    def force(simp):
+        pass
+
+    sim.additional_forces = force
+    with pytest.raises(ValueError, match="additional_forces"):
+        scenes.Custom(sim, duration=1.0)
+
+
+def test_heavy_imports_stay_lazy():
+    """Importing the package and the comparison modules pulls in neither astropy, matplotlib nor dask."""
+    import subprocess
+    import sys
+
+    code = ("import sys, rebound_pfvi, rebound_pfvi.compare, rebound_pfvi.scenes, rebound_pfvi.report, "
+            "rebound_pfvi.paper, rebound_pfvi.__main__ as cli; cli.build_parser(); "
+            "print(sorted(m for m in ('astropy', 'matplotlib', 'dask', 'distributed') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-P", "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"

@@ -1,0 +1,29 @@
+"""The examples run as a user would run them, writing only into a temporary folder."""
+import json
+import pathlib
+import runpy
+
+EXAMPLES = pathlib.Path(__file__).resolve().parent.parent / "examples"
+
+
+def test_compare_script(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    runpy.run_path(str(EXAMPLES / "compare_eccentric.py"), run_name="__main__")
+    out = capsys.readouterr().out
+    assert "pfvi: steps" in out and "position_error_km" in out
+    assert sorted(p.name for p in (tmp_path / "compare-example").iterdir()) == [
+        "kepler-e0.9.csv", "kepler-e0.9.json", "kepler-e0.9.md", "kepler-e0.9.png"]
+
+
+def test_notebook_cells(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    notebook = json.loads((EXAMPLES / "work_precision.ipynb").read_text())
+    namespace = {}
+    for cell in notebook["cells"]:
+        if cell["cell_type"] == "code":
+            exec(compile("".join(cell["source"]), "work_precision.ipynb", "exec"), namespace)
+    assert len(namespace["table"]) == 12
+    assert (tmp_path / "comet-results" / "comet-e0.95.png").exists()
+    assert namespace["sim"].integrator.n_steps > 0
