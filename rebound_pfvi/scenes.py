@@ -441,16 +441,7 @@ def make(name, **params):
     return SCENES[name](**params)
 
 
-def _number(value, name):
-    if isinstance(value, bool):
-        raise ValueError(f"{name}={value!r} is not a number")
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}={value!r} is not a number") from None
-    if not math.isfinite(number):
-        raise ValueError(f"{name}={value!r} is not finite")
-    return number
+_number = units.plain_number
 
 
 def _positive(number, name):

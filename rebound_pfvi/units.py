@@ -65,8 +65,6 @@ def parse(text, kind, name):
 def to_scene(value, kind, name):
     """A float in the scene's unit of `kind` from a Quantity, or a plain number
     taken to be in that unit already. `name` names the argument in errors."""
-    if isinstance(value, bool):
-        raise ValueError(f"{name}={value!r} is not a number")
     if isinstance(value, str):
         value = parse(value, kind, name)
     if hasattr(value, "unit"):
@@ -79,11 +77,20 @@ def to_scene(value, kind, name):
             raise ValueError(f"{name}={value} has unit {value.unit}, which is not a {kind}; "
                              f"allowed: {', '.join(ALLOWED.get(kind, (str(unit),)))}") from None
         number = float(number)
-    else:
-        try:
-            number = float(value)
-        except (TypeError, ValueError):
-            raise ValueError(f"{name}={value!r} is neither a number nor a Quantity") from None
+        if not math.isfinite(number):
+            raise ValueError(f"{name}={value!r} is not finite")
+        return number
+    return plain_number(value, name)
+
+
+def plain_number(value, name):
+    """A finite float from a number (not a bool); errors name the argument."""
+    if isinstance(value, bool):
+        raise ValueError(f"{name}={value!r} is not a number")
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}={value!r} is neither a number nor a Quantity") from None
     if not math.isfinite(number):
         raise ValueError(f"{name}={value!r} is not finite")
     return number
