@@ -14,28 +14,35 @@ import astropy.units as u
 
 from rebound_pfvi import compare, report, scenes
 
-# A Jupiter-mass planet on an e = 0.9 orbit at 2 AU around a 0.8 Msun star.
-scene = scenes.Kepler(e=0.9, a=2 * u.AU, mass=0.8 * u.Msun, m=1 * u.Mjup, periods=20)
-print(scene.describe(), "- period", scene.period_quantity().to(u.day))
 
-# The default sweep, or pick settings yourself, e.g.
-#   compare.Setting("pfvi", 1e-8, (("stages", 6), ("fitting", "none")))
-settings = compare.default_settings(scene, "quick")
-settings.append(compare.Setting("pfvi", 1e-8, (("stages", 6), ("fitting", "none"))))
+def main():
+    # A Jupiter-mass planet on an e = 0.9 orbit at 2 AU around a 0.8 Msun star.
+    scene = scenes.Kepler(e=0.9, a=2 * u.AU, mass=0.8 * u.Msun, m=1 * u.Mjup, periods=20)
+    print(scene.describe(), "- period", scene.period_quantity().to(u.day))
 
-results = compare.run(scene, settings, repeats=3)  # a local process pool; Ctrl-C keeps finished runs
-table = results.table()  # astropy QTable: wall_time in s, position_error in AU (and km)
-table.sort("wall_time")
-print(table["line", "knob", "value", "steps", "wall_time", "energy_error_max", "position_error_km"])
+    # The default sweep, or pick settings yourself, e.g.
+    #   compare.Setting("pfvi", 1e-8, (("stages", 6), ("fitting", "none")))
+    settings = compare.default_settings(scene, "quick")
+    settings.append(compare.Setting("pfvi", 1e-8, (("stages", 6), ("fitting", "none"))))
 
-paths = report.write(results, "compare-example", command="python3 examples/compare_eccentric.py")
-print("wrote", ", ".join(paths.values()))
+    results = compare.run(scene, settings, repeats=3)  # a local process pool; Ctrl-C keeps finished runs
+    table = results.table()  # astropy QTable: wall_time in s, position_error in AU (and km)
+    table.sort("wall_time")
+    print(table["line", "knob", "value", "steps", "wall_time", "energy_error_max", "position_error_km"])
 
-# Your own REBOUND simulation with pfvi, as with any integrator:
-import rebound_pfvi  # noqa: E402,F401  (registers "pfvi"; the imports above already did)
+    paths = report.write(results, "compare-example", command="python3 examples/compare_eccentric.py")
+    print("wrote", ", ".join(paths.values()))
 
-sim = scene.build()
-sim.integrator = "pfvi"
-sim.integrator.epsilon = 1e-8
-sim.integrate(scene.t_end)
-print("pfvi: steps", sim.integrator.n_steps, "trial steps", sim.integrator.n_attempts)
+    # Your own REBOUND simulation with pfvi, as with any integrator (rebound_pfvi is
+    # imported above, which registers "pfvi"):
+    sim = scene.build()
+    sim.integrator = "pfvi"
+    sim.integrator.epsilon = 1e-8
+    sim.integrate(scene.t_end)
+    print("pfvi: steps", sim.integrator.n_steps, "trial steps", sim.integrator.n_attempts)
+
+
+# The guard matters: the sweep's worker processes are started with "spawn" and
+# import this file; without it each would rerun the sweep.
+if __name__ == "__main__":
+    main()
