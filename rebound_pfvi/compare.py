@@ -25,9 +25,7 @@ import math
 import os
 import signal
 import time
-from dataclasses import asdict, dataclass, field
-
-from . import scenes as _scenes
+from dataclasses import dataclass, field
 
 FAMILIES = ("pfvi", "ias15", "whfast", "leapfrog", "bs")
 #: The accuracy knob of each family, as the table and plot call it.
@@ -270,6 +268,8 @@ def run(scene, settings=None, repeats=3, samples=100, workers=None, scheduler=No
         raise ValueError(f"repeats={repeats!r} must be at least 1")
     if int(samples) < 1:
         raise ValueError(f"samples={samples!r} must be at least 1")
+    if workers is not None and int(workers) < 1:
+        raise ValueError(f"workers={workers!r} must be at least 1")
     reference = scene.reference()
     tasks = [(i, scene, s, reference, int(repeats), int(samples)) for i, s in enumerate(settings)]
     done = {}
@@ -281,22 +281,21 @@ def run(scene, settings=None, repeats=3, samples=100, workers=None, scheduler=No
         if progress:
             progress(len(done), len(tasks), row)
 
+    if scheduler is None:
+        workers = int(workers or os.cpu_count() or 1)
+        where = "local pool" if workers > 1 else "this process"
+    else:
+        workers, where = 0, "dask"  # known once connected
     try:
         if scheduler is not None:
             workers, where = _run_dask(tasks, scheduler, record)
+        elif workers == 1:
+            for task in tasks:
+                record(*_task(task))
         else:
-            workers = int(workers or os.cpu_count() or 1)
-            if workers < 1:
-                raise ValueError(f"workers={workers!r} must be at least 1")
-            where = "local pool" if workers > 1 else "this process"
-            if workers == 1:
-                for task in tasks:
-                    record(*_task(task))
-            else:
-                _run_pool(tasks, workers, record)
+            _run_pool(tasks, workers, record)
     except KeyboardInterrupt:
         interrupted = True
-        where = "interrupted"
     rows = [done[i] for i in sorted(done)]
     return Results(scene, settings, rows, reference, int(repeats), int(samples), workers, where,
                    time.perf_counter() - tick, interrupted)

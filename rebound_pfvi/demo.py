@@ -14,6 +14,7 @@ import time
 import rebound
 
 from . import INTEGRATOR_NAME  # noqa: F401  (registers "pfvi")
+from .scenes import kepler_relative, orbit_elements
 
 M_PLANET = 1e-3
 
@@ -28,12 +29,7 @@ def kepler_pair(e):
 
 def exact_relative_position(sim0, t):
     """Relative position of body 1 about body 0 at time t, from the elements at t = 0."""
-    o = sim0.particles[1].orbit(primary=sim0.particles[0])
-    ref = rebound.Simulation()
-    ref.add(m=sim0.particles[0].m)
-    ref.add(m=sim0.particles[1].m, a=o.a, e=o.e, inc=o.inc, Omega=o.Omega, omega=o.omega,
-            M=o.M + o.n * t, primary=ref.particles[0])
-    d = ref.particles[1] - ref.particles[0]
+    d = kepler_relative(sim0.G, sim0.particles[0].m, sim0.particles[1].m, orbit_elements(sim0), t)
     return d.x, d.y, d.z
 
 

@@ -15,6 +15,8 @@ energy over the period, taken after every step.
 """
 import math
 
+from .scenes import kepler_relative, orbit_elements
+
 EPSILONS = tuple(10.0 ** -k for k in range(3, 11))
 ECCENTRICITIES = (0.5, 0.9, 0.95, 0.99)
 SEED_CLAIM = "phase fitting needs close to one third of the classical steps (e = 0.95)"
@@ -202,17 +204,6 @@ counted.
 # ---------------------------------------------------------------------------
 # Figures 2 and 3: the seed's long run at e = 0.95 and its curvature frequency.
 
-def _exact_relative(sim0_elements, mass, t):
-    import rebound
-
-    el = sim0_elements
-    ref = rebound.Simulation()
-    ref.add(m=mass)
-    ref.add(m=0.0, a=el.a, e=el.e, inc=el.inc, Omega=el.Omega, omega=el.omega, M=el.M + el.n * t,
-            primary=ref.particles[0])
-    return ref.particles[1] - ref.particles[0]
-
-
 def _pfvi(sim, stages, epsilon, step_control, fitting="phase"):
     sim.integrator = "pfvi"
     sim.integrator.stages = stages
@@ -238,7 +229,7 @@ def figure2_rows(e=0.95, periods=1e5, samples=2000, stages=4, epsilon=1e-6, step
     error is the distance from the exact Kepler position at the same time.
     """
     sim = seed_problem(e)
-    elements = sim.particles[1].orbit(primary=sim.particles[0])
+    elements = orbit_elements(sim)
     E0 = _specific_energy(sim)
     period = sim.particles[1].P
     _pfvi(sim, stages, epsilon, step_control)
@@ -246,7 +237,7 @@ def figure2_rows(e=0.95, periods=1e5, samples=2000, stages=4, epsilon=1e-6, step
     for k in range(1, samples + 1):
         sim.integrate(periods * period * k / samples, exact_finish_time=0)
         d = sim.particles[1] - sim.particles[0]
-        exact = _exact_relative(elements, 1.0, sim.t)
+        exact = kepler_relative(sim.G, 1.0, 0.0, elements, sim.t)
         rows.append({"t_periods": sim.t / period, "energy_error": abs(_specific_energy(sim) / E0 - 1.0),
                      "position_error": math.dist((d.x, d.y, d.z), (exact.x, exact.y, exact.z)),
                      "steps": int(sim.integrator.n_steps)})
@@ -259,13 +250,13 @@ def figure3_rows(e=0.95, periods=10, stages=4, epsilon=1e-6, step_control="rever
     """The curvature frequency at every step over the first periods (seed Figure 3),
     beside its exact value on the exact orbit at the same time."""
     sim = seed_problem(e)
-    elements = sim.particles[1].orbit(primary=sim.particles[0])
+    elements = orbit_elements(sim)
     period = sim.particles[1].P
     _pfvi(sim, stages, epsilon, step_control)
     rows = []
     while sim.t < periods * period:
         sim.steps(1)
-        exact = _exact_relative(elements, 1.0, sim.t)
+        exact = kepler_relative(sim.G, 1.0, 0.0, elements, sim.t)
         r3 = (exact.x**2 + exact.y**2 + exact.z**2) ** 1.5
         exact.ax, exact.ay, exact.az = -exact.x / r3, -exact.y / r3, -exact.z / r3
         rows.append({"t_periods": sim.t / period, "omega": curvature_frequency(sim.particles[1]),

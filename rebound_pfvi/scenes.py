@@ -47,6 +47,27 @@ def rebound_G():
     return _new_simulation().G
 
 
+def orbit_elements(sim, i=1):
+    """Elements of particle i about particle 0, as a dict (a, e, inc, Omega, omega, M, n)."""
+    o = sim.particles[i].orbit(primary=sim.particles[0])
+    return dict(a=o.a, e=o.e, inc=o.inc, Omega=o.Omega, omega=o.omega, M=o.M, n=o.n)
+
+
+def kepler_relative(G, mass, m, elements, t):
+    """The orbiter relative to its primary at time t (a ``rebound.Particle``):
+    REBOUND's elements-to-Cartesian conversion of `elements` (at t = 0) with
+    the mean anomaly advanced by n t. The exact reference of two-body runs."""
+    import rebound
+
+    el = elements
+    ref = rebound.Simulation()
+    ref.G = G
+    ref.add(m=mass)
+    ref.add(m=m, a=el["a"], e=el["e"], inc=el["inc"], Omega=el["Omega"], omega=el["omega"],
+            M=el["M"] + el["n"] * t, primary=ref.particles[0])
+    return ref.particles[1] - ref.particles[0]
+
+
 def _positions(sim):
     return [(p.x, p.y, p.z) for p in sim.particles]
 
@@ -160,22 +181,12 @@ class Kepler(Scene):
         return 2.0 * math.pi * math.sqrt(self.a**3 / (rebound_G() * (self.mass + self.m)))
 
     def reference(self):
-        return {"elements": self._elements(), "uncertainty": 0.0,
+        return {"elements": orbit_elements(self.build()), "uncertainty": 0.0,
                 "how": "exact: REBOUND's orbital elements at t = 0, mean anomaly advanced by n t"}
-
-    def _elements(self):
-        sim = self.build()
-        o = sim.particles[1].orbit(primary=sim.particles[0])
-        return dict(a=o.a, e=o.e, inc=o.inc, Omega=o.Omega, omega=o.omega, M=o.M, n=o.n)
 
     def exact_relative_position(self, t, elements=None):
         """Position of body 1 relative to body 0 at time t, from REBOUND's elements."""
-        el = elements or self._elements()
-        ref = _new_simulation()
-        ref.add(m=self.mass)
-        ref.add(m=self.m, a=el["a"], e=el["e"], inc=el["inc"], Omega=el["Omega"], omega=el["omega"],
-                M=el["M"] + el["n"] * t, primary=ref.particles[0])
-        d = ref.particles[1] - ref.particles[0]
+        d = kepler_relative(rebound_G(), self.mass, self.m, elements or orbit_elements(self.build()), t)
         return d.x, d.y, d.z
 
     def position_error(self, sim, reference):
