@@ -171,3 +171,87 @@ def test_no_particles_advances_time():
     sim.dt = 0.1
     sim.steps(3)
     assert sim.t == pytest.approx(0.3)
+
+
+@pytest.mark.parametrize("particle, mass", [(1, -1e-3), (2, -1e-20), (0, -1.0)])
+def test_negative_mass_is_refused_naming_the_particle(particle, mass, stages):
+    sim = pfvi_sim(stages)
+    sim.particles[particle].m = mass
+    assert_refused(sim, rf"particle {particle} has a negative mass m = -.*masses must be >= 0")
+
+
+def test_negative_mass_at_the_start_is_refused():
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=-1e-3, a=1.0)
+    sim.integrator = "pfvi"
+    assert_refused(sim, r"particle 1 has a negative mass")
+
+
+def test_non_finite_gravitational_constant_is_named(stages):
+    sim = pfvi_sim(stages)
+    sim.G = math.nan
+    assert_refused(sim, r"sim\.G = nan is not finite")
+
+
+def test_non_finite_time_is_named(stages):
+    sim = pfvi_sim(stages)
+    sim.t = math.inf
+    with pytest.raises(RuntimeError, match=r"sim\.t = inf is not finite"):
+        sim.steps(1)
+
+
+def test_two_particles_at_one_position_are_refused(stages):
+    sim = pfvi_sim(stages)
+    sim.particles[2].x, sim.particles[2].y, sim.particles[2].z = (
+        sim.particles[1].x, sim.particles[1].y, sim.particles[1].z)
+    assert_refused(sim, r"force on particle 1 is not finite .*two particles at one position")
+
+
+def test_unknown_field_and_wrong_types_raise_in_python():
+    sim = pfvi_sim()
+    with pytest.raises(AttributeError, match="foo"):
+        sim.integrator.foo = 1
+    with pytest.raises(TypeError):
+        sim.integrator.stages = "four"
+    with pytest.raises(TypeError):
+        sim.integrator.epsilon = "small"
+
+
+@pytest.mark.parametrize("epsilon", [0.0, 1e-6])
+def test_a_single_particle_moves_on_its_straight_line(epsilon, stages):
+    # N = 1: no force, curvature frequency 0, the estimate has nothing to
+    # measure; the particle must still move exactly along its line.
+    sim = rebound.Simulation()
+    sim.add(m=1.0, x=1.0, y=-2.0, vx=0.5, vy=0.25, vz=-0.125)
+    sim.integrator = "pfvi"
+    sim.integrator.stages = stages
+    sim.integrator.epsilon = epsilon
+    sim.dt = 0.125
+    sim.integrate(10.0)
+    p = sim.particles[0]
+    assert sim.t == 10.0
+    assert (p.x, p.y, p.z) == pytest.approx((6.0, 0.5, -1.25), abs=1e-13)
+    assert (p.vx, p.vy, p.vz) == (0.5, 0.25, -0.125)
+
+
+def test_a_single_particle_in_an_external_field_is_integrated():
+    # N = 1 with a force from additional_forces: the 1-D oscillator, exact with
+    # the known frequency.
+    sim = rebound.Simulation()
+    sim.gravity = "none"
+    sim.add(m=1.0, x=1.0)
+
+    def spring(simp):
+        p = simp.contents.particles[0]
+        p.ax = -4.0 * p.x
+
+    sim.additional_forces = spring
+    sim.integrator = "pfvi"
+    sim.integrator.stages = 2
+    sim.integrator.epsilon = 0.
+    sim.integrator.frequency = "fixed"
+    sim.integrator.omega = 2.0
+    sim.dt = 0.25
+    sim.steps(40)
+    assert sim.particles[0].x == pytest.approx(math.cos(20.0), abs=1e-13)

@@ -239,6 +239,10 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_state*
         pfvi_error(r, "pfvi: sim.dt = %g is not valid; the time step must be finite and non-zero.", r->dt);
         return 0;
     }
+    if (!isfinite(r->G)){
+        pfvi_error(r, "pfvi: sim.G = %g is not finite.", r->G);
+        return 0;
+    }
     if (!isfinite(r->t)){
         pfvi_error(r, "pfvi: sim.t = %g is not finite.", r->t);
         return 0;
@@ -265,7 +269,7 @@ static void* pfvi_grow(void* buffer, size_t size, int* ok){
 static int pfvi_ensure_scratch(struct reb_simulation* r, struct pfvi_state* s, size_t N){
     if (s->N_compensation != N){
         // New or removed particles: the low-order parts no longer belong to
-        // anyone. (A particle edited in place keeps its few ulps: harmless.)
+        // anyone. (Particles edited in place: pfvi_forget_edited.)
         struct pfvi_compensation* comp = realloc(s->compensation, N*sizeof(struct pfvi_compensation));
         if (!comp){
             pfvi_error(r, "pfvi: could not allocate scratch memory for %zu particles.", N);
@@ -329,6 +333,28 @@ static int pfvi_end_is_start(const struct reb_simulation* r, const struct pfvi_s
     return 1;
 }
 
+// A particle the user edited (or replaced) since the last step keeps nothing
+// from its predecessor: its compensation is cleared and the stage predictor
+// dropped, so that continuing equals starting afresh from the edited state.
+static void pfvi_forget_edited(const struct reb_simulation* r, struct pfvi_state* s){
+    const size_t N = r->N;
+    if (s->cache_N != N || s->N_compensation != N){
+        return;  // N changed (compensation already cleared) or no step to compare with
+    }
+    const struct reb_particle* const ps = r->particles;
+    const struct pfvi_end_state* const e = s->end;
+    int edited = 0;
+    for (size_t i=0; i<N; i++){
+        if (memcmp(&ps[i].x, e[i].xv, sizeof(e[i].xv)) || memcmp(&ps[i].m, &e[i].m, sizeof(double))){
+            s->compensation[i] = (struct pfvi_compensation){{0., 0., 0.}, {0., 0., 0.}};
+            edited = 1;
+        }
+    }
+    if (edited){
+        s->predictor_stages = 0;
+    }
+}
+
 // Puts every particle (all fields) and t back to the start of the step.
 void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0){
     memcpy(r->particles, s->start, N*sizeof(struct reb_particle));
@@ -354,7 +380,8 @@ int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* s, siz
         if (!(isfinite(ps[i].ax) && isfinite(ps[i].ay) && isfinite(ps[i].az))){
             const double t = r->t;
             pfvi_roll_back(r, s, N, t0);
-            pfvi_error(r, "pfvi: the force on particle %zu is not finite at t = %.17g; step not taken, state restored.", i, t);
+            pfvi_error(r, "pfvi: the force on particle %zu is not finite at t = %.17g (two particles at one position? "
+                    "an additional force returning NaN or Inf?); step not taken, state restored.", i, t);
             return 0;
         }
     }
@@ -581,15 +608,22 @@ static void pfvi_step(struct reb_simulation* r, void* state){
     // integrate() call (REBOUND resets dt_last_done to 0), velocity-dependent
     // forces, or any bit of N, t, G, a position, velocity or mass.
     const int reuse = r->dt_last_done != 0. && !r->force_is_velocity_dependent && pfvi_end_is_start(r, s);
-    s->cache_N = 0;
     if (!reuse){
+        // Checked before anything is changed, so that a refusal leaves the
+        // integrator's own state as it was too.
         for (size_t i=0; i<N; i++){
             if (!pfvi_particle_finite(&ps[i])){
                 pfvi_error(r, "pfvi: particle %zu has a non-finite position, velocity or mass; step not taken.", i);
                 return;
             }
+            if (ps[i].m < 0.){
+                pfvi_error(r, "pfvi: particle %zu has a negative mass m = %.17g; masses must be >= 0. Step not taken.", i, ps[i].m);
+                return;
+            }
         }
+        pfvi_forget_edited(r, s);
     }
+    s->cache_N = 0;
     memcpy(p0, ps, N*sizeof(struct reb_particle));
     if (!reuse){
         if (!pfvi_update_acceleration(r, s, N, t0)){
