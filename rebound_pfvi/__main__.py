@@ -1,7 +1,8 @@
 """Command line: ``rebound-pfvi`` or ``python -m rebound_pfvi``.
 
 Commands: ``demo`` (default), ``compare`` (error against run time on a
-scene), ``paper fig1|fig2|fig3`` (the seed's figures). Heavy imports
+scene), ``stability`` (stiff and extreme cases), ``paper fig1|fig2|fig3``
+(the seed's figures). Heavy imports
 (astropy, matplotlib, dask) happen only in the command that needs them.
 """
 import argparse
@@ -76,6 +77,26 @@ def _families(text):
     return names
 
 
+def _case_names(text):
+    from .stability import cases
+
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    bad = [n for n in names if n not in cases()]
+    if bad or not names:
+        raise argparse.ArgumentTypeError(f"{', '.join(bad) or repr(text)} not a case; allowed: "
+                                         f"{', '.join(cases())} (comma-separated)")
+    return names
+
+
+def _stability_families(text):
+    names = [n.strip().lower() for n in text.split(",") if n.strip()]
+    bad = [n for n in names if n not in ("pfvi", "ias15", "whfast")]
+    if bad or not names:
+        raise argparse.ArgumentTypeError(f"{', '.join(bad) or repr(text)} not an integrator; allowed: "
+                                         "pfvi, ias15, whfast (comma-separated)")
+    return names
+
+
 def build_parser():
     parser = argparse.ArgumentParser(prog="rebound-pfvi",
                                      description="Phase-fitted discrete Lagrangian integrator for REBOUND.")
@@ -103,6 +124,24 @@ def build_parser():
     compare.add_argument("--scheduler", default=None, metavar="ADDRESS",
                          help="send the runs to this Dask distributed scheduler (needs the [dask] extra)")
     compare.add_argument("--output", default="rebound-pfvi-results", help="folder for the results")
+
+    stability = commands.add_parser(
+        "stability", help="stiff and extreme cases: pfvi (every fitting, s = 2 and 4) beside IAS15 and WHFast",
+        description="Runs each extreme case (e up to 0.9999, flybys, radial infall, Burrau's problem, a "
+                    "close encounter, mass ratios, fixed steps beyond u_max, 1e5 periods, a stiff triple) "
+                    "with every integrator, each in its own process with a wall-time budget, and writes "
+                    "stability.md and stability.json to --output.")
+    stability.add_argument("--cases", type=_case_names, default=None,
+                           help="comma-separated case names (default: all; --list shows them)")
+    stability.add_argument("--list", action="store_true", help="list the cases and exit")
+    stability.add_argument("--integrators", type=_stability_families, default=("pfvi", "ias15", "whfast"),
+                           help="comma-separated, from pfvi, ias15, whfast (default: all three)")
+    stability.add_argument("--epsilon", type=_positive_float, default=1e-6,
+                           help="pfvi's tolerance on adaptive cases (default 1e-6, pfvi's default)")
+    stability.add_argument("--budget", type=_positive_float, default=60.0,
+                           help="seconds of integration per run before it is stopped (default 60)")
+    stability.add_argument("--workers", type=_positive_int, default=2, help="runs at once (default 2)")
+    stability.add_argument("--output", default="rebound-pfvi-stability", help="folder for the report")
 
     paper = commands.add_parser("paper", help="rerun a figure of the seed paper")
     paper.add_argument("figure", choices=("fig1", "fig2", "fig3"),
@@ -224,6 +263,41 @@ def run_paper(args):
     return 0
 
 
+def run_stability(args, argv):
+    from . import stability
+
+    if args.list:
+        for name, case in stability.cases().items():
+            print(f"{name:20s} {case.title}")
+        return 0
+    configs = stability.default_configs(args.integrators, epsilon=args.epsilon)
+    names = args.cases or list(stability.cases())
+    total = len(names) * len(configs)
+    print(f"{len(names)} cases x {len(configs)} integrators = {total} runs, {args.workers} at once, "
+          f"budget {args.budget:g} s each", flush=True)
+    bar = Progress()
+    done = [0]
+
+    def progress(index, outcome):
+        done[0] += 1
+        row = outcome[1] if outcome[0] == "ok" else None
+        what = f"{row['case']}: {row['integrator']} {row['status'][:40]}" if row else f"[{outcome[0]}]"
+        bar.stream.write(f"[{done[0]}/{total}] {time.perf_counter() - bar.start:.0f} s {what}\n")
+        bar.stream.flush()
+
+    try:
+        report = stability.run_all(names, configs, budget=args.budget, workers=args.workers, progress=progress)
+    except KeyboardInterrupt:
+        print("\nInterrupted: nothing written.", file=sys.stderr)
+        return 130
+    command = "rebound-pfvi " + " ".join(shlex.quote(a) for a in argv)
+    paths = stability.write(report, args.output, command=command)
+    bad = [r for r in report.rows if r["status"] != "finished"]
+    print(f"Wrote {', '.join(map(str, paths))} ({report.wall_s:.0f} s); {len(report.rows) - len(bad)} runs "
+          f"finished, {len(bad)} refused, stopped or failed (see what_happened)")
+    return 0
+
+
 def main(argv=None):
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
@@ -232,6 +306,8 @@ def main(argv=None):
         return run_compare(parser, args, argv)
     if args.command == "paper":
         return run_paper(args)
+    if args.command == "stability":
+        return run_stability(args, argv)
     from .demo import run_demo
 
     run_demo(getattr(args, "orbits", 100))

@@ -67,10 +67,23 @@ void pfvi_osculating_circle(const double v[3], const double a[3], struct pfvi_os
     }
 }
 
+// Whether the circles at the two ends bound anything. Across an inflection
+// (curvature through zero: common in N-body paths, never on a Kepler orbit)
+// the binormal flips and the circles lie on opposite sides of the path; the
+// estimate is then 2 min(R)/min(R) = 2 however short the step (Burrau's
+// problem refused every step at an inflection), so it says nothing there.
+int pfvi_osculating_comparable(const struct pfvi_osculating* c0, const struct pfvi_osculating* c1){
+    if (!c0->defined || !c1->defined){
+        return 0;
+    }
+    return c0->binormal[0]*c1->binormal[0] + c0->binormal[1]*c1->binormal[1]
+        + c0->binormal[2]*c1->binormal[2] >= 0.;
+}
+
 double pfvi_osculating_error(const struct reb_particle* p0, const struct pfvi_osculating* c0,
         const struct reb_particle* p1, const struct pfvi_osculating* c1, double* noise_out){
     *noise_out = 0.;
-    if (!c0->defined || !c1->defined){
+    if (!pfvi_osculating_comparable(c0, c1)){
         return 0.;
     }
     // O1 - O0 as the step's displacement plus the change of the offsets, so
@@ -79,8 +92,8 @@ double pfvi_osculating_error(const struct reb_particle* p0, const struct pfvi_os
         (p1->x - p0->x) + (c1->offset[0] - c0->offset[0]),
         (p1->y - p0->y) + (c1->offset[1] - c0->offset[1]),
         (p1->z - p0->z) + (c1->offset[2] - c0->offset[2])};
-    // Drop the out-of-plane (torsion) part; not across an inflection, where
-    // the binormal flips and has no mean.
+    // Drop the out-of-plane (torsion) part. (The binormals are within 90
+    // degrees here, so their mean is defined; the test is kept as a guard.)
     const double b[3] = {c0->binormal[0] + c1->binormal[0], c0->binormal[1] + c1->binormal[1],
         c0->binormal[2] + c1->binormal[2]};
     const double b2 = b[0]*b[0] + b[1]*b[1] + b[2]*b[2];
@@ -127,7 +140,7 @@ static struct control_view control_look(const struct reb_simulation* r, struct p
         struct pfvi_osculating c1;
         pfvi_osculating_circle(v, a, &c1);
         const struct pfvi_osculating* const c0 = &s->osculating_start[i];
-        view.informed |= (c0->defined && c1.defined);
+        view.informed |= pfvi_osculating_comparable(c0, &c1);
         double noise;
         const double error = pfvi_osculating_error(&s->start[i], c0, &ps[i], &c1, &noise);
         if (error > view.error){

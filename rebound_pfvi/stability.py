@@ -1,0 +1,630 @@
+"""Stiff and extreme cases: does each integrator finish, how wrong is it, and what happened?
+
+``rebound-pfvi stability`` runs every case of :data:`CASES` with pfvi (every
+fitting, s = 2 and 4, adaptive steps unless the case prescribes fixed ones)
+beside IAS15 and WHFast. Every run is a separate process with a wall-time
+budget, so that a run which crashes, hangs or crawls becomes a row of the
+report ("crashed", "killed", "stopped by the budget") instead of taking the
+report down with it. Each row gives: the status (finished, refused with
+pfvi's error, stopped), the time reached, the relative energy error (final
+and largest over 100 checkpoints), the position error against a reference at
+the time reached, steps, wall time, and what the integrator reported (u
+limited, steps rejected, asymmetric reversible steps).
+
+Units are AU, yr and Msun (G from REBOUND) unless a case says otherwise.
+References: the exact two-body solution where there is one (REBOUND's
+elements with the mean anomaly advanced; the radial Kepler equation for the
+infall); otherwise IAS15 at epsilon 1e-11, with its distance to a run at
+1e-10 reported as the reference's uncertainty.
+"""
+import math
+import multiprocessing
+import time
+from dataclasses import dataclass, field
+
+from . import scenes
+
+FITTINGS = ("phase", "phase-literal", "none")
+STAGES = (2, 4)
+CHECKPOINTS = 100
+#: A run still busy this long after its budget is killed (a step, or one
+#: chunk between checkpoints, may overrun the budget).
+GRACE_SECONDS = 60.0
+
+
+@dataclass
+class Case:
+    """One extreme case: how to build it, how long to run it, how to judge it."""
+
+    name: str
+    title: str
+    build: object  # callable() -> rebound.Simulation at t = 0
+    t_end: float
+    time_scale: float  # the shortest dynamical time (period); sets first steps
+    reference: str = "ias15"  # or "kepler" (exact two-body) or "radial" (exact infall)
+    fixed_dt: float = None  # fixed steps for pfvi (epsilon = 0) and WHFast
+    whfast_dt: float = None  # default time_scale / 100
+    note: str = ""
+    exact: object = None  # callable(t) -> relative position (x, y, z) for exact references
+
+    @property
+    def whfast_step(self):
+        if self.fixed_dt is not None:
+            return self.fixed_dt
+        return self.whfast_dt if self.whfast_dt is not None else self.time_scale / 100.0
+
+
+# --- the cases ---------------------------------------------------------------
+
+def _G():
+    return scenes.rebound_G()
+
+
+def _two_body(e, m=1e-3, a=1.0, f=math.pi, mass=1.0):
+    def build():
+        sim = scenes._new_simulation()
+        sim.add(m=mass)
+        sim.add(m=m, a=a, e=e, f=f)
+        sim.move_to_com()
+        return sim
+    return build
+
+
+def _kepler_exact(build):
+    sim = build()
+    elements = scenes.orbit_elements(sim)
+    mass, m = sim.particles[0].m, sim.particles[1].m
+
+    def exact(t):
+        d = scenes.kepler_relative(_G(), mass, m, elements, t)
+        return d.x, d.y, d.z
+    return exact
+
+
+def _period(a, mass):
+    return 2.0 * math.pi * math.sqrt(a**3 / (_G() * mass))
+
+
+def _kepler_case(name, title, e, periods, m=1e-3, fixed_dt=None, note="", dt_periods=None):
+    build = _two_body(e, m=m)
+    period = _period(1.0, 1.0 + m)
+    case = Case(name, title, build, periods * period, period, reference="kepler", note=note,
+                fixed_dt=(fixed_dt * period if fixed_dt is not None else None))
+    case.exact = _kepler_exact(build)
+    return case
+
+
+def _conic(q, e, f0, m=1e-3, mass=1.0):
+    """A body on a conic of pericentre q and eccentricity e >= 1 (or any e), at true anomaly f0."""
+    def build():
+        G = _G()
+        p = q * (1.0 + e)
+        r = p / (1.0 + e * math.cos(f0))
+        k = math.sqrt(G * (mass + m) / p)
+        sim = scenes._new_simulation()
+        sim.add(m=mass)
+        sim.add(m=m, x=r * math.cos(f0), y=r * math.sin(f0), vx=-k * math.sin(f0), vy=k * (e + math.cos(f0)))
+        sim.move_to_com()
+        return sim
+    return build
+
+
+def _time_from_pericentre(q, e, f, mass):
+    """Time from pericentre to true anomaly f on a parabola or hyperbola."""
+    G = _G()
+    if e == 1.0:
+        D = math.tan(f / 2.0)
+        p = 2.0 * q
+        return 0.5 * math.sqrt(p**3 / (G * mass)) * (D + D**3 / 3.0)
+    a = q / (e - 1.0)
+    F = 2.0 * math.atanh(math.sqrt((e - 1.0) / (e + 1.0)) * math.tan(f / 2.0))
+    return (e * math.sinh(F) - F) * math.sqrt(a**3 / (G * mass))
+
+
+def _flyby_case(e):
+    q, m = 0.005, 1e-3
+    f_limit = math.pi if e == 1.0 else math.acos(-1.0 / e)
+    f0 = -(170.0 / 180.0 * math.pi if e == 1.0 else 0.95 * f_limit)
+    t_half = abs(_time_from_pericentre(q, e, f0, 1.0 + m))
+    kind = "parabolic" if e == 1.0 else "hyperbolic"
+    # Time scale: the pericentre passage, q / v_q.
+    v_q = math.sqrt(_G() * (1.0 + m) * (1.0 + e) / q)
+    return Case(f"flyby-e{e:g}", f"{kind} flyby, e = {e:g}: Jupiter-mass body past a Sun at q = {q} AU, "
+                f"true anomaly {math.degrees(f0):.0f} to {math.degrees(-f0):.0f} deg",
+                _conic(q, e, f0, m), 2.0 * t_half, 2.0 * math.pi * q / v_q)
+
+
+def _radial_infall():
+    """A Jupiter-mass body released at rest at r0 = 1 AU falls onto a Sun: zero
+    angular momentum, curvature frequency 0; stopped at r = 0.01 AU."""
+    r0, r_stop, m = 1.0, 0.01, 1e-3
+    a = r0 / 2.0
+    G = _G()
+    scale = math.sqrt(a**3 / (G * (1.0 + m)))
+
+    def eccentric_anomaly(t):
+        # r = a (1 - cos E), t = scale (E - sin E - pi), from E = pi at rest.
+        target = t / scale + math.pi
+        E = math.pi + 1e-3
+        for _ in range(100):
+            step = (E - math.sin(E) - target) / (1.0 - math.cos(E))
+            E -= step
+            if abs(step) < 1e-16:
+                break
+        return E
+
+    E_stop = 2.0 * math.pi - math.acos(1.0 - r_stop / a)
+    t_stop = scale * (E_stop - math.sin(E_stop) - math.pi)
+
+    def build():
+        sim = scenes._new_simulation()
+        sim.add(m=1.0)
+        sim.add(m=m, x=r0)
+        sim.move_to_com()
+        return sim
+
+    def exact(t):
+        return a * (1.0 - math.cos(eccentric_anomaly(t))), 0.0, 0.0
+
+    free_fall = scale * math.pi
+    return Case("radial-infall", f"radial infall of a Jupiter-mass body from rest at {r0:g} AU (zero angular momentum, curvature "
+                f"frequency 0), stopped at r = {r_stop:g} AU, {t_stop / free_fall:.4f} of the free-fall time",
+                build, t_stop, 2.0 * math.pi * math.sqrt(r_stop**3 / G), reference="radial", exact=exact,
+                note="The last hundredth of the fall is left out: the collision itself is a singularity.")
+
+
+def _pythagorean():
+    """Burrau's problem: masses 3, 4, 5 at rest at the corners of a 3-4-5 triangle."""
+    def build():
+        sim = scenes._new_simulation()
+        for m, x, y in ((3.0, 1.0, 3.0), (4.0, -2.0, -1.0), (5.0, 1.0, -1.0)):
+            sim.add(m=m, x=x, y=y)
+        sim.move_to_com()
+        return sim
+    # In G = 1 units the first very close approach is near t = 15.8; run to 20.
+    unit = 1.0 / math.sqrt(_G())
+    return Case("pythagorean", "start from zero velocity: Burrau's three bodies (3, 4, 5 Msun at rest on a "
+                "3-4-5 AU triangle), through its close approaches to t = 20 in G = 1 units",
+                build, 20.0 * unit, 0.1 * unit)
+
+
+def _jupiter_encounter():
+    """Two Jupiter-mass planets on crossing orbits, 0.006 AU apart at mid-run."""
+    half = 0.3
+
+    def build():
+        import rebound  # noqa: F401
+
+        G = _G()
+        sim = scenes._new_simulation()
+        sim.add(m=1.0)
+        sim.add(m=1e-3, a=1.0, e=0.0)
+        v = math.sqrt(G)
+        # The second planet, near the first, on an eccentric orbit crossing its path.
+        sim.add(m=1e-3, x=1.005, y=0.003, z=0.001, vx=0.45 * v, vy=1.1 * v, vz=0.0)
+        sim.move_to_com()
+        sim.integrator = "ias15"
+        sim.integrator.epsilon = 1e-12
+        sim.dt = -1e-4
+        sim.integrate(-half, exact_finish_time=1)
+        sim.t = 0.0
+        sim.integrator = "leapfrog"  # the case's integrator is chosen by the runner
+        sim.dt = 1e-3
+        sim.steps_done = 0
+        return sim
+    return Case("jupiter-encounter", "close encounter of two Jupiter-mass planets on crossing orbits (a = 1 AU "
+                "circular; e ~ 0.4), 0.006 AU (0.09 Hill radii) apart at t = 0.3 yr", build, 2.0 * half,
+                _period(1.0, 1.0), note="WHFast's Jacobi splitting is not meant for close encounters.")
+
+
+def _stiff_binary():
+    """A tight binary (P = 0.001 yr) with a companion whose period is 10^4 times longer."""
+    a_in, e_in = 0.01, 0.5
+    P_in = _period(a_in, 1.0)
+    a_out = (_G() * 1.1 * (1e4 * P_in / (2.0 * math.pi)) ** 2) ** (1.0 / 3.0)
+
+    def build():
+        sim = scenes._new_simulation()
+        sim.add(m=0.5)
+        sim.add(m=0.5, a=a_in, e=e_in)
+        sim.add(m=0.1, a=a_out, e=0.3, inc=0.5)
+        sim.move_to_com()
+        return sim
+    return Case("stiff-binary", f"stiff: 0.5 + 0.5 Msun binary, a = {a_in} AU, e = {e_in} (P = {P_in:.3g} yr) with a "
+                f"0.1 Msun companion at a = {a_out:.3g} AU (periods 10^4 apart), one outer period",
+                build, 1e4 * P_in, P_in)
+
+
+def _u_at_pericentre_dt(e, u):
+    """The step at which u = omega dt at pericentre of a unit orbit (Sun + 1e-3) equals u."""
+    G, mass, a = _G(), 1.001, 1.0
+    r = a * (1.0 - e)
+    v = math.sqrt(G * mass * (1.0 + e) / r)
+    omega = (G * mass / r**2) / v  # |v x a| / |v|^2 at pericentre
+    return u / omega / _period(a, mass)  # in periods
+
+
+def _build_cases():
+    cases = []
+    for e in (0.99, 0.999, 0.9999):
+        cases.append(_kepler_case(f"kepler-e{e:g}", f"Kepler e = {e:g}, 10 periods from apocentre", e, 10.0))
+    for e in (1.0, 1.5, 5.0):
+        cases.append(_flyby_case(e))
+    cases.append(_radial_infall())
+    cases.append(_pythagorean())
+    cases.append(_jupiter_encounter())
+    for m in (1e-12, 1e-6, 1e-3, 1.0):
+        cases.append(_kepler_case(f"mass-ratio-{m:g}", f"mass ratio {m:g}: Kepler e = 0.5, 10 periods, "
+                                  "centre-of-mass frame", 0.5, 10.0, m=m))
+    e = 0.9
+    for label, u in (("at", 1.0), ("4x", 4.0), ("40x", 40.0)):
+        dt = _u_at_pericentre_dt(e, u)
+        cases.append(_kepler_case(f"fixed-u-{label}", f"fixed steps of {dt:.3g} periods, u = omega dt = {u:g} at "
+                                  f"pericentre ({label} u_max = 1), Kepler e = {e}, 3 periods", e, 3.0,
+                                  fixed_dt=dt))
+    tiny = _kepler_case("fixed-1e-12", "fixed steps of 1e-12 periods, 1000 steps, Kepler e = 0.9", 0.9,
+                        1000 * 1e-12, fixed_dt=1e-12)
+    cases.append(tiny)
+    cases.append(_kepler_case("long-e0.99", "10^5 periods at e = 0.99 (stopped by the budget if slower)",
+                              0.99, 1e5))
+    cases.append(_stiff_binary())
+    return {c.name: c for c in cases}
+
+
+_CASES = None
+
+
+def cases():
+    """Every case, by name (built once per process: some need G from REBOUND)."""
+    global _CASES
+    if _CASES is None:
+        _CASES = _build_cases()
+    return _CASES
+
+
+# --- the integrators -----------------------------------------------------------
+
+@dataclass(frozen=True)
+class Config:
+    family: str  # pfvi, ias15, whfast
+    fitting: str = None
+    stages: int = None
+    epsilon: float = None
+
+    @property
+    def label(self):
+        if self.family == "pfvi":
+            return f"pfvi {self.fitting} s={self.stages}"
+        return self.family.upper() if self.family != "whfast" else "WHFast"
+
+
+def default_configs(integrators=("pfvi", "ias15", "whfast"), fittings=FITTINGS, stages=STAGES,
+                    epsilon=1e-6, ias15_epsilon=1e-9):
+    configs = []
+    for family in integrators:
+        if family == "pfvi":
+            configs += [Config("pfvi", f, s, epsilon) for s in stages for f in fittings]
+        elif family == "ias15":
+            configs.append(Config("ias15", epsilon=ias15_epsilon))
+        elif family == "whfast":
+            configs.append(Config("whfast"))
+        else:
+            raise ValueError(f"integrators: {family!r} is not one of pfvi, ias15, whfast")
+    return configs
+
+
+def configure(sim, case, config):
+    if config.family == "pfvi":
+        sim.integrator = "pfvi"
+        sim.integrator.fitting = config.fitting
+        sim.integrator.stages = config.stages
+        if case.fixed_dt is not None:
+            sim.integrator.epsilon = 0.0
+            sim.dt = case.fixed_dt
+        else:
+            sim.integrator.epsilon = config.epsilon
+            sim.dt = case.time_scale / 10.0  # the cap on adaptive steps
+    elif config.family == "ias15":
+        sim.integrator = "ias15"
+        sim.integrator.epsilon = config.epsilon
+        sim.dt = case.fixed_dt if case.fixed_dt is not None else case.time_scale / 100.0
+    else:
+        sim.integrator = "whfast"
+        sim.dt = case.whfast_step
+
+
+# --- one run -------------------------------------------------------------------
+
+def _energies(sim):
+    T = 0.0
+    com = sim.com()
+    for p in sim.particles:
+        T += 0.5 * p.m * ((p.vx - com.vx) ** 2 + (p.vy - com.vy) ** 2 + (p.vz - com.vz) ** 2)
+    E = sim.energy()
+    return E, T
+
+
+def _energy_scale(sim):
+    """|E0|, or |T0| + |V0| where E0 is round-off of a cancellation (a parabola)."""
+    E, T = _energies(sim)
+    magnitude = abs(T) + abs(E - T)
+    return abs(E) if abs(E) > 1e-6 * magnitude else magnitude
+
+
+def _positions(sim):
+    return [(p.x, p.y, p.z) for p in sim.particles]
+
+
+def run(case_name, config, budget):
+    """One run of `config` on a case, within `budget` seconds of integration."""
+    case = cases()[case_name]
+    row = {"case": case_name, "integrator": config.label, "family": config.family, "fitting": config.fitting,
+           "stages": config.stages, "epsilon": config.epsilon, "status": "finished", "budget_s": budget}
+    sim = case.build()
+    configure(sim, case, config)
+    E0 = sim.energy()
+    scale = _energy_scale(sim)
+    worst = 0.0
+    tick = time.perf_counter()
+    try:
+        for k in range(1, CHECKPOINTS + 1):
+            last = k == CHECKPOINTS
+            sim.integrate(case.t_end * k / CHECKPOINTS, exact_finish_time=1 if last else 0)
+            worst = max(worst, abs(sim.energy() - E0) / scale)
+            if not last and time.perf_counter() - tick > budget:
+                row["status"] = f"stopped by the budget of {budget:g} s"
+                break
+    except RuntimeError as error:  # pfvi refuses a step (state unchanged) or REBOUND stops
+        row["status"] = f"refused: {error}"
+    except Exception as error:  # noqa: BLE001 - any other failure is a result of the run, kept with its type
+        row["status"] = f"error: {type(error).__name__}: {error}"
+    wall = time.perf_counter() - tick
+    E = sim.energy()
+    row.update(t=float(sim.t), fraction=float(sim.t) / case.t_end, wall_s=wall, steps=int(sim.steps_done),
+               energy_error=abs(E - E0) / scale, energy_error_max=max(worst, abs(E - E0) / scale),
+               positions=_positions(sim), finite=all(math.isfinite(x) for p in _positions(sim) for x in p))
+    if config.family == "pfvi":
+        ri = sim.integrator
+        row.update(n_steps=int(ri.n_steps), n_attempts=int(ri.n_attempts), n_rejected=int(ri.n_rejected),
+                   n_asymmetric=int(ri.n_asymmetric), n_u_limited=int(ri.n_u_limited),
+                   iterations_max=int(ri.iterations_max))
+    return row
+
+
+def reference_positions(case_name, t, epsilon=scenes.REFERENCE_EPSILON):
+    """Every particle's position at t from IAS15 (or the exact solution, relative to particle 0)."""
+    case = cases()[case_name]
+    if case.reference in ("kepler", "radial"):
+        return case.exact(t)
+    sim = case.build()
+    sim.integrator = "ias15"
+    sim.integrator.epsilon = epsilon
+    sim.dt = case.time_scale / 100.0
+    if t != 0.0:
+        sim.integrate(t, exact_finish_time=1)
+    return _positions(sim)
+
+
+def position_error(case, row, reference):
+    positions = row["positions"]
+    if case.reference in ("kepler", "radial"):
+        d = [positions[1][k] - positions[0][k] for k in range(3)]
+        return math.dist(d, reference)
+    return max(math.dist(p, q) for p, q in zip(positions, reference))
+
+
+# --- running many, each in its own process -------------------------------------
+
+def _child(conn, job):
+    kind, args = job
+    try:
+        if kind == "run":
+            result = run(*args)
+        else:
+            case_name, t = args
+            result = {"best": reference_positions(case_name, t),
+                      "check": reference_positions(case_name, t, scenes.REFERENCE_CHECK_EPSILON)}
+        conn.send(("ok", result))
+    except BaseException as error:  # noqa: BLE001 - reported to the parent, which records it
+        conn.send(("error", f"{type(error).__name__}: {error}"))
+    finally:
+        conn.close()
+
+
+@dataclass
+class _Slot:
+    process: object
+    conn: object
+    job: tuple
+    index: int
+    deadline: float
+
+
+def run_isolated(jobs, workers=2, hard_limits=None, progress=None):
+    """Runs each job in a fresh process, at most `workers` at once.
+
+    Returns a list of ("ok", result) | ("error", message) | ("crashed", exit
+    code) | ("killed", seconds), one per job, in order. A job is killed once
+    its hard limit (seconds) has passed.
+    """
+    ctx = multiprocessing.get_context("spawn")
+    results = [None] * len(jobs)
+    pending = list(range(len(jobs)))
+    running = []
+    try:
+        while pending or running:
+            while pending and len(running) < max(1, workers):
+                i = pending.pop(0)
+                parent, child = ctx.Pipe(duplex=False)
+                process = ctx.Process(target=_child, args=(child, jobs[i]), daemon=True)
+                process.start()
+                child.close()
+                limit = hard_limits[i] if hard_limits else None
+                running.append(_Slot(process, parent, jobs[i], i,
+                                     time.monotonic() + limit if limit else math.inf))
+            for slot in list(running):
+                outcome = None
+                if slot.conn.poll(0.02):
+                    try:
+                        outcome = slot.conn.recv()
+                    except EOFError:
+                        slot.process.join()
+                        outcome = ("crashed", slot.process.exitcode)
+                elif not slot.process.is_alive():
+                    slot.process.join()
+                    outcome = ("crashed", slot.process.exitcode)
+                elif time.monotonic() > slot.deadline:
+                    slot.process.kill()
+                    outcome = ("killed", hard_limits[slot.index])
+                if outcome is not None:
+                    slot.process.join()
+                    slot.conn.close()
+                    running.remove(slot)
+                    results[slot.index] = outcome
+                    if progress:
+                        progress(slot.index, outcome)
+    finally:
+        for slot in running:
+            slot.process.kill()
+            slot.process.join()
+    return results
+
+
+@dataclass
+class Report:
+    rows: list
+    references: dict = field(default_factory=dict)
+    budget: float = 0.0
+    wall_s: float = 0.0
+
+    def to_dict(self):
+        return {"budget_s": self.budget, "wall_s": self.wall_s, "rows": self.rows,
+                "references": self.references,
+                "cases": {name: {"title": c.title, "t_end": c.t_end, "reference": c.reference,
+                                 "fixed_dt": c.fixed_dt, "whfast_dt": c.whfast_step, "note": c.note}
+                          for name, c in cases().items() if name in self.references}}
+
+
+def what_happened(row):
+    """The status, and what pfvi counted on the way."""
+    parts = [row["status"]]
+    if row.get("family") == "pfvi" and "n_steps" in row:
+        if row["n_u_limited"]:
+            parts.append(f"u limited in {row['n_u_limited']} particle-steps")
+        if row["n_rejected"]:
+            parts.append(f"{row['n_rejected']} trial steps rejected")
+        if row["n_asymmetric"]:
+            parts.append(f"{row['n_asymmetric']} reversible steps not solved (asymmetric)")
+    if row["status"] == "finished" and not row["finite"]:
+        parts.append("NON-FINITE STATE")
+    return "; ".join(parts)
+
+
+def run_all(case_names=None, configs=None, budget=60.0, workers=2, progress=None):
+    """Every case x every config, each run isolated; references first."""
+    table = cases()
+    names = list(case_names) if case_names else list(table)
+    for name in names:
+        if name not in table:
+            raise ValueError(f"cases: {name!r} is not a case; allowed: {', '.join(table)}")
+    configs = configs or default_configs()
+    tick = time.perf_counter()
+    references = {}
+    ref_jobs = [("reference", (n, table[n].t_end)) for n in names if table[n].reference == "ias15"]
+    for (_, (name, _t)), outcome in zip(ref_jobs, run_isolated(ref_jobs, workers)):
+        if outcome[0] != "ok":
+            raise RuntimeError(f"the IAS15 reference of case {name} failed: {outcome}")
+        best, check = outcome[1]["best"], outcome[1]["check"]
+        references[name] = {"positions": best, "uncertainty": max(math.dist(a, b) for a, b in zip(best, check)),
+                            "how": f"IAS15 epsilon {scenes.REFERENCE_EPSILON:g}; uncertainty: distance to "
+                                   f"epsilon {scenes.REFERENCE_CHECK_EPSILON:g}"}
+    for name in names:
+        if table[name].reference != "ias15":
+            references[name] = {"uncertainty": 0.0, "how": "exact" if table[name].reference == "kepler"
+                                else "exact (radial Kepler equation)"}
+    jobs = [("run", (n, c, budget)) for n in names for c in configs]
+    outcomes = run_isolated(jobs, workers, hard_limits=[budget + GRACE_SECONDS] * len(jobs), progress=progress)
+    rows = []
+    for (_, (name, config, _b)), outcome in zip(jobs, outcomes):
+        case = table[name]
+        if outcome[0] == "ok":
+            row = outcome[1]
+        else:
+            row = {"case": name, "integrator": config.label, "family": config.family, "fitting": config.fitting,
+                   "stages": config.stages, "epsilon": config.epsilon, "t": None, "fraction": None,
+                   "wall_s": None, "steps": None, "energy_error": None, "energy_error_max": None,
+                   "positions": None, "finite": False,
+                   "status": {"crashed": f"crashed: process exit code {outcome[1]}",
+                              "killed": f"killed: no result {outcome[1]:g} s after the start",
+                              "error": f"error: {outcome[1]}"}[outcome[0]]}
+        if row.get("positions") is not None and row["finite"]:
+            if case.reference == "ias15" and row["t"] != case.t_end:
+                reference = reference_positions(name, row["t"])
+            elif case.reference == "ias15":
+                reference = references[name]["positions"]
+            else:
+                reference = case.exact(row["t"])
+            row["position_error"] = position_error(case, row, reference)
+        else:
+            row["position_error"] = None
+        row["what_happened"] = what_happened(row)
+        rows.append(row)
+    return Report(rows, references, budget, time.perf_counter() - tick)
+
+
+def _fmt(x, spec=".2g"):
+    if x is None:
+        return "-"
+    if isinstance(x, float) and not math.isfinite(x):
+        return str(x)
+    return format(x, spec)
+
+
+def markdown(report, command=None):
+    """The report as markdown: one table per case."""
+    lines = ["# Stability report: extreme cases", ""]
+    if command:
+        lines += [f"Produced by `{command}` in {report.wall_s:.0f} s (2 cores here); every run in its own "
+                  f"process with a budget of {report.budget:g} s of integration.", ""]
+    lines += ["Columns: status and what the integrator counted; t reached as a fraction of the case's end; "
+              "relative energy error at the end and the largest over 100 checkpoints (for the parabola, "
+              "relative to |T0| + |V0|); largest position error against the reference at the time reached "
+              "(AU; for two-body cases the relative vector); steps; wall time.", ""]
+    by_case = {}
+    for row in report.rows:
+        by_case.setdefault(row["case"], []).append(row)
+    for name, rows in by_case.items():
+        case = cases()[name]
+        ref = report.references.get(name, {})
+        lines += [f"## {name}", "", case.title + ".", ""]
+        how = ref.get("how", "")
+        if ref.get("uncertainty"):
+            how += f" = {ref['uncertainty']:.2g} AU"
+        lines += [f"Reference: {how}. "
+                  + (f"Fixed steps: {case.fixed_dt:.3g} yr (pfvi epsilon = 0, WHFast). " if case.fixed_dt else
+                     f"WHFast dt = {case.whfast_step:.3g} yr. ") + case.note, ""]
+        lines += ["| integrator | t reached | energy error (end / max) | position error | steps | wall s | "
+                  "what happened |", "|---|---|---|---|---|---|---|"]
+        for r in rows:
+            lines.append(f"| {r['integrator']} | {_fmt(r['fraction'], '.3g')} | {_fmt(r['energy_error'])} / "
+                         f"{_fmt(r['energy_error_max'])} | {_fmt(r['position_error'])} | {_fmt(r['steps'], 'd')} | "
+                         f"{_fmt(r['wall_s'], '.3g')} | {r['what_happened'].replace('|', '/')} |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def write(report, directory, command=None):
+    """stability.json and stability.md in `directory`; returns their paths."""
+    import json
+    import pathlib
+
+    directory = pathlib.Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    paths = [directory / "stability.json", directory / "stability.md"]
+    rows = [{k: v for k, v in r.items() if k != "positions"} for r in report.rows]
+    data = report.to_dict()
+    data["rows"] = rows
+    data["command"] = command
+    paths[0].write_text(json.dumps(data, indent=1, default=str))
+    paths[1].write_text(markdown(report, command))
+    return paths
