@@ -415,16 +415,16 @@ def position_error(case, row, reference):
 
 # --- running many, each in its own process -------------------------------------
 
+def _reference_pair(case_name, t):
+    """The IAS15 reference at t, and the looser run its uncertainty is taken from."""
+    return {"best": reference_positions(case_name, t),
+            "check": reference_positions(case_name, t, scenes.REFERENCE_CHECK_EPSILON)}
+
+
 def _child(conn, job):
-    kind, args = job
+    function, args = job
     try:
-        if kind == "run":
-            result = run(*args)
-        else:
-            case_name, t = args
-            result = {"best": reference_positions(case_name, t),
-                      "check": reference_positions(case_name, t, scenes.REFERENCE_CHECK_EPSILON)}
-        conn.send(("ok", result))
+        conn.send(("ok", function(*args)))
     except BaseException as error:  # noqa: BLE001 - reported to the parent, which records it
         conn.send(("error", f"{type(error).__name__}: {error}"))
     finally:
@@ -441,7 +441,8 @@ class _Slot:
 
 
 def run_isolated(jobs, workers=2, hard_limits=None, progress=None):
-    """Runs each job in a fresh process, at most `workers` at once.
+    """Runs each job, a (module-level function, args) pair, in a fresh process,
+    at most `workers` at once.
 
     Returns a list of ("ok", result) | ("error", message) | ("crashed", exit
     code) | ("killed", seconds), one per job, in order. A job is killed once
@@ -520,6 +521,15 @@ def what_happened(row):
     return "; ".join(parts)
 
 
+def _failed_status(outcome):
+    kind, detail = outcome
+    if kind == "crashed":
+        return f"crashed: process exit code {detail}"
+    if kind == "killed":
+        return f"killed: no result {detail:g} s after the start"
+    return f"error: {detail}"
+
+
 def run_all(case_names=None, configs=None, budget=60.0, workers=2, progress=None):
     """Every case x every config, each run isolated; references first."""
     table = cases()
@@ -530,7 +540,7 @@ def run_all(case_names=None, configs=None, budget=60.0, workers=2, progress=None
     configs = configs or default_configs()
     tick = time.perf_counter()
     references = {}
-    ref_jobs = [("reference", (n, table[n].t_end)) for n in names if table[n].reference == "ias15"]
+    ref_jobs = [(_reference_pair, (n, table[n].t_end)) for n in names if table[n].reference == "ias15"]
     for (_, (name, _t)), outcome in zip(ref_jobs, run_isolated(ref_jobs, workers)):
         if outcome[0] != "ok":
             raise RuntimeError(f"the IAS15 reference of case {name} failed: {outcome}")
@@ -542,7 +552,7 @@ def run_all(case_names=None, configs=None, budget=60.0, workers=2, progress=None
         if table[name].reference != "ias15":
             references[name] = {"uncertainty": 0.0, "how": "exact" if table[name].reference == "kepler"
                                 else "exact (radial Kepler equation)"}
-    jobs = [("run", (n, c, budget)) for n in names for c in configs]
+    jobs = [(run, (n, c, budget)) for n in names for c in configs]
     outcomes = run_isolated(jobs, workers, hard_limits=[budget + GRACE_SECONDS] * len(jobs), progress=progress)
     rows = []
     for (_, (name, config, _b)), outcome in zip(jobs, outcomes):
@@ -554,9 +564,7 @@ def run_all(case_names=None, configs=None, budget=60.0, workers=2, progress=None
                    "stages": config.stages, "epsilon": config.epsilon, "t": None, "fraction": None,
                    "wall_s": None, "steps": None, "energy_error": None, "energy_error_max": None,
                    "positions": None, "finite": False,
-                   "status": {"crashed": f"crashed: process exit code {outcome[1]}",
-                              "killed": f"killed: no result {outcome[1]:g} s after the start",
-                              "error": f"error: {outcome[1]}"}[outcome[0]]}
+                   "status": _failed_status(outcome)}
         if row.get("positions") is not None and row["finite"]:
             if case.reference == "ias15" and row["t"] != case.t_end:
                 reference = reference_positions(name, row["t"])
