@@ -303,18 +303,30 @@ def run(scene, settings=None, repeats=3, samples=100, workers=None, scheduler=No
 
 def _run_pool(tasks, workers, record):
     import multiprocessing
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+    from concurrent.futures.process import BrokenProcessPool
 
-    # spawn: workers start clean, without this process's ctypes callbacks.
-    pool = multiprocessing.get_context("spawn").Pool(workers, initializer=_ignore_sigint)
+    # spawn: workers start clean, without this process's ctypes callbacks. An
+    # executor, not multiprocessing.Pool: a worker that dies (a script without
+    # a __main__ guard, a crash in C) breaks it with an error; Pool would
+    # start replacements forever.
+    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"), initializer=_ignore_sigint)
     try:
-        for index, row in pool.imap_unordered(_task, tasks):
-            record(index, row)
-        pool.close()
+        pending = {pool.submit(_task, task) for task in tasks}
+        while pending:
+            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                record(*future.result())
+    except BrokenProcessPool as error:
+        raise RuntimeError("workers: a worker process died before returning its run (a script that calls "
+                           "compare.run() needs an `if __name__ == '__main__':` guard, since workers import "
+                           "it; or the run crashed; workers=1 runs in this process)") from error
     except BaseException:  # Ctrl-C or a failure in the parent: stop the workers now
-        pool.terminate()
+        for process in list(getattr(pool, "_processes", {}).values()):
+            process.terminate()
         raise
     finally:
-        pool.join()
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _run_dask(tasks, scheduler, record):

@@ -255,3 +255,16 @@ def test_a_single_particle_in_an_external_field_is_integrated():
     sim.dt = 0.25
     sim.steps(40)
     assert sim.particles[0].x == pytest.approx(math.cos(20.0), abs=1e-13)
+
+
+@pytest.mark.parametrize("epsilon", [0.0, 1e-6])
+def test_a_step_below_the_rounding_of_t_is_refused_not_repeated_for_ever(epsilon, stages):
+    # t + dt == t: REBOUND would call the step for ever; pfvi refuses it.
+    sim = pfvi_sim(stages)
+    sim.integrator.epsilon = epsilon
+    sim.t = 1e10
+    sim.dt = 1e-10
+    before = snapshot(sim)
+    with pytest.raises(RuntimeError, match=r"step dt = 1e-10 does not change t = 10000000000 .*state restored"):
+        sim.integrate(1e10 + 1.0)
+    assert snapshot(sim) == before

@@ -1,6 +1,8 @@
 """Scenes, the comparison runner, its reports and the compare CLI (issue 5)."""
 import json
 import math
+import subprocess
+import sys
 
 import pytest
 
@@ -265,3 +267,18 @@ def test_heavy_imports_stay_lazy():
             "print(sorted(m for m in ('astropy', 'matplotlib', 'dask', 'distributed') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-P", "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+def test_script_without_main_guard_fails_instead_of_respawning(tmp_path):
+    # Spawned workers import the script; without a guard each one starts its
+    # own sweep and dies. The pool must then fail with a message, not hang.
+    script = tmp_path / "unguarded.py"
+    script.write_text("from rebound_pfvi import compare, scenes\n"
+                      "scene = scenes.Kepler(e=0.5, periods=1)\n"
+                      "settings = compare.default_settings(scene, families=['whfast'])[:2]\n"
+                      "compare.run(scene, settings, repeats=1, samples=2, workers=2)\n")
+    done = subprocess.run([sys.executable, "-P", str(script)], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode != 0
+    assert "workers: a worker process died before returning its run" in done.stderr
+    assert "__main__" in done.stderr

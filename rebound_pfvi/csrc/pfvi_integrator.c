@@ -590,6 +590,11 @@ static void pfvi_step(struct reb_simulation* r, void* state){
     const double t0 = r->t;
     const size_t N = r->N;
     if (N == 0){
+        if (t0 + r->dt == t0){
+            pfvi_error(r, "pfvi: the step dt = %.3g does not change t = %.17g (it is below the rounding of t); "
+                    "step not taken.", r->dt, t0);
+            return;
+        }
         r->t = t0 + r->dt;
         r->dt_last_done = r->dt;
         s->n_steps++;
@@ -655,6 +660,13 @@ static void pfvi_step(struct reb_simulation* r, void* state){
         if (h == 0.){
             return;
         }
+    }
+    if (r->t == t0){
+        // t + h rounds to t: REBOUND would call this step for ever.
+        pfvi_roll_back(r, s, N, t0);
+        pfvi_error(r, "pfvi: the step dt = %.3g does not change t = %.17g (it is below the rounding of t); "
+                "step not taken, state restored. Use a larger dt, or start t nearer 0.", h, t0);
+        return;
     }
     r->dt_last_done = h;
     s->n_steps++;
