@@ -105,7 +105,10 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "| |R1 - R2| - |O1 - O2| | on a step's position error from the osculating circles "
         "(radius R, centre O) at its two ends, relative to the smaller radius, for the particle "
         "where it is largest; on non-planar paths the centre's motion out of the circles' mean "
-        "plane (torsion, not error) is left out. 0: fixed steps of sim.dt. Default 1e-6 (docs/adaptive.md). The "
+        "plane (torsion, not error) is left out. A particle without circles at both ends on the same side "
+        "of its path (at rest, on a straight or radial path, or across an inflection) is left out of "
+        "that step's estimate; with no particle left the step is held, at most sim.dt "
+        "(docs/stability.md). 0: fixed steps of sim.dt. Default 1e-6 (docs/adaptive.md). The "
         "step is also kept at u = omega*|dt| <= u_max. sim.dt is the first step tried and, "
         "after each step, the next one proposed, as with IAS15.",
         REB_DOUBLE, epsilon),
