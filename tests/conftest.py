@@ -73,3 +73,14 @@ def two_body(m1, a=1.0, e=0.0, com=True, f=0.0):
 
 def relative_energy_error(sim, E0):
     return abs((sim.energy() - E0) / E0)
+
+
+#: Step modes for tests that must hold in each: (stages, epsilon, step_control).
+STEP_MODES = {
+    "fixed-s2": (2, 0.0, "reversible"),
+    "fixed-s4": (4, 0.0, "reversible"),
+    "seed-s2": (2, 1e-7, "seed"),
+    "seed-s4": (4, 1e-7, "seed"),
+    "reversible-s2": (2, 1e-7, "reversible"),
+    "reversible-s4": (4, 1e-7, "reversible"),
+}

@@ -4,16 +4,9 @@ import math
 
 import pytest
 
-from conftest import snapshot, two_body
+from conftest import STEP_MODES, snapshot, two_body
 
-MODES = {  # (stages, epsilon, step_control)
-    "fixed-s2": (2, 0.0, "reversible"),
-    "fixed-s4": (4, 0.0, "reversible"),
-    "seed-s2": (2, 1e-7, "seed"),
-    "seed-s4": (4, 1e-7, "seed"),
-    "reversible-s2": (2, 1e-7, "reversible"),
-    "reversible-s4": (4, 1e-7, "reversible"),
-}
+MODES = STEP_MODES
 
 
 def running(mode, fitting="phase"):

@@ -4,16 +4,10 @@ the same as starting afresh from the changed state."""
 import pytest
 import rebound
 
-from conftest import two_body
+from conftest import STEP_MODES, two_body
 
 FIELDS = ("x", "y", "z", "vx", "vy", "vz", "m")
-MODES = {  # (stages, epsilon, step_control)
-    "fixed-s2": (2, 0.0, "reversible"),
-    "fixed-s4": (4, 0.0, "reversible"),
-    "seed-s4": (4, 1e-7, "seed"),
-    "reversible-s2": (2, 1e-7, "reversible"),
-    "reversible-s4": (4, 1e-7, "reversible"),
-}
+MODES = STEP_MODES
 
 
 def configure(sim, mode):
