@@ -86,13 +86,11 @@ def _period(a, mass):
     return 2.0 * math.pi * math.sqrt(a**3 / (_G() * mass))
 
 
-def _kepler_case(name, title, e, periods, m=1e-3, fixed_dt=None, note="", dt_periods=None):
+def _kepler_case(name, title, e, periods, m=1e-3, fixed_dt=None, note=""):
     build = _two_body(e, m=m)
     period = _period(1.0, 1.0 + m)
-    case = Case(name, title, build, periods * period, period, reference="kepler", note=note,
-                fixed_dt=(fixed_dt * period if fixed_dt is not None else None))
-    case.exact = _kepler_exact(build)
-    return case
+    return Case(name, title, build, periods * period, period, reference="kepler", note=note,
+                fixed_dt=(fixed_dt * period if fixed_dt is not None else None), exact=_kepler_exact(build))
 
 
 def _conic(q, e, f0, m=1e-3, mass=1.0):
@@ -194,8 +192,6 @@ def _jupiter_encounter():
     half = 0.3
 
     def build():
-        import rebound  # noqa: F401
-
         G = _G()
         sim = scenes._new_simulation()
         sim.add(m=1.0)
@@ -209,8 +205,7 @@ def _jupiter_encounter():
         sim.dt = -1e-4
         sim.integrate(-half, exact_finish_time=1)
         sim.t = 0.0
-        sim.integrator = "leapfrog"  # the case's integrator is chosen by the runner
-        sim.dt = 1e-3
+        sim.integrator = "leapfrog"  # drops IAS15's state; the runner chooses the integrator and dt
         sim.steps_done = 0
         return sim
     return Case("jupiter-encounter", "close encounter of two Jupiter-mass planets on crossing orbits (a = 1 AU "

@@ -18,6 +18,13 @@ def snapshot(sim):
     return sim.t, particle_bytes(sim)
 
 
+def fixed_step_pfvi(sim):
+    """pfvi with fixed steps of sim.dt and the two-point scheme (s = 2), unless a test sets others."""
+    sim.integrator = "pfvi"
+    sim.integrator.epsilon = 0.
+    sim.integrator.stages = 2
+
+
 def harmonic_oscillator(omega, q0=(1.0, 0.3), v0=(0.2, 0.7), **fields):
     """2-D isotropic oscillator: gravity off, force -omega^2 x from additional_forces."""
     sim = rebound.Simulation()
@@ -31,9 +38,7 @@ def harmonic_oscillator(omega, q0=(1.0, 0.3), v0=(0.2, 0.7), **fields):
         p.az = -omega * omega * p.z
 
     sim.additional_forces = force
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.integrator.frequency = "fixed"
     sim.integrator.omega = omega
     for name, value in fields.items():

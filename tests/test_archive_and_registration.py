@@ -9,6 +9,7 @@ import pytest
 import rebound
 
 import rebound_pfvi
+from conftest import fixed_step_pfvi
 
 STATE = ("x", "y", "z", "vx", "vy", "vz")
 
@@ -19,9 +20,7 @@ def setup_sim(stages=2):
     sim.add(m=1e-3, a=1.0, e=0.6)
     sim.add(m=0.0, a=1.7, e=0.2, inc=0.1)
     sim.move_to_com()
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.integrator.fitting = "phase"
     sim.integrator.u_max = 0.8
     sim.integrator.stages = stages

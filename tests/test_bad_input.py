@@ -4,7 +4,7 @@ import math
 import pytest
 import rebound
 
-from conftest import snapshot, two_body
+from conftest import fixed_step_pfvi, snapshot, two_body
 
 
 @pytest.fixture(params=[2, 3, 4, 5, 6], ids=lambda s: f"s={s}")
@@ -16,9 +16,7 @@ def stages(request):
 def pfvi_sim(stages=2):
     sim = two_body(1e-3, e=0.3, com=True)
     sim.add(m=0.0, a=2.0, e=0.1, primary=sim.particles[0])
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.integrator.stages = stages
     sim.dt = 0.01
     sim.integrate(0.5)  # mid-run, with a force already kept from the last step
@@ -165,9 +163,7 @@ def test_a_refused_step_can_be_retried_after_fixing_the_input():
 
 def test_no_particles_advances_time():
     sim = rebound.Simulation()
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.dt = 0.1
     sim.steps(3)
     assert sim.t == pytest.approx(0.3)

@@ -5,6 +5,7 @@ import pytest
 import rebound
 
 import rebound_pfvi
+from conftest import fixed_step_pfvi
 
 
 def seed_step(q0, v0, h, omega, force, fitting):
@@ -38,9 +39,7 @@ def pfvi_step(q0, v0, h, omega, force, fitting):
         p.ax = force(p.x)
 
     sim.additional_forces = add_force
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.integrator.fitting = fitting
     sim.integrator.frequency = "fixed"
     sim.integrator.omega = omega

@@ -4,7 +4,7 @@ import math
 import pytest
 import rebound
 
-from conftest import two_body
+from conftest import fixed_step_pfvi, two_body
 
 
 def planet_and_test_particle(testparticle_type):
@@ -39,9 +39,7 @@ def test_test_particles_follow_rebound_semantics(testparticle_type):
     moved_by_test_particle = abs(star.vx - results["leapfrog"].particles[0].vx)
     assert moved_by_test_particle < 1e-8
     ref = planet_and_test_particle(1 - testparticle_type)
-    ref.integrator = "pfvi"
-    ref.integrator.epsilon = 0.  # fixed steps of dt
-    ref.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(ref)
     ref.integrator.fitting = "none"
     ref.dt = 1e-3
     ref.integrate(1.0)
@@ -63,9 +61,7 @@ def test_velocity_dependent_force_converges_at_second_order():
 
         sim.additional_forces = drag
         sim.force_is_velocity_dependent = 1
-        sim.integrator = "pfvi"
-        sim.integrator.epsilon = 0.  # fixed steps of dt
-        sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+        fixed_step_pfvi(sim)
         sim.dt = h
         sim.integrate(2.0)
         return abs(sim.particles[0].vx - math.exp(-1.4)), sim.integrator.n_force_evaluations
@@ -80,9 +76,7 @@ def test_velocity_dependent_force_converges_at_second_order():
 def test_direct_gravity_modes(gravity):
     sim = two_body(1e-3, e=0.3, com=True)
     sim.gravity = gravity
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.dt = 1e-3
     E0 = sim.energy()
     sim.integrate(2 * math.pi)
@@ -101,9 +95,7 @@ def damped_oscillator_error(s, h, T=4.0):
 
     sim.additional_forces = force
     sim.force_is_velocity_dependent = 1
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.integrator.stages = s
     sim.integrator.fitting = "none"
     sim.dt = h

@@ -3,16 +3,14 @@ import math
 
 import pytest
 
-from conftest import exact_phase_cos_sin, relative_energy_error, two_body
+from conftest import exact_phase_cos_sin, fixed_step_pfvi, relative_energy_error, two_body
 
 N_PER_ORBIT = 20
 ORBITS = 1000
 
 
 def circular_errors(sim, fitting):
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.integrator.fitting = fitting
     p0, p1 = sim.particles[0], sim.particles[1]
     mu = sim.G * (p0.m + p1.m)
@@ -61,9 +59,7 @@ def test_fitted_splitting_is_unstable_for_a_body_whose_force_ignores_its_positio
     # step (docs/method.md, "Stability"). Measured growth 0.0501 and 0.0125
     # per step against -ln cos u = 0.0502 and 0.0124.
     sim = two_body(1e-3, com=True)
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     P = 2 * math.pi / math.sqrt(1 + 1e-3)
     h = P / n
     sim.dt = h
@@ -84,9 +80,7 @@ def test_fitted_splitting_is_unstable_for_a_body_whose_force_ignores_its_positio
 
 def test_classical_scheme_is_stable_there():
     sim = two_body(1e-3, com=True)
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.integrator.fitting = "none"
     E0 = sim.energy()
     sim.dt = 2 * math.pi / 20
@@ -107,9 +101,7 @@ def test_eccentric_two_body_against_ias15():
     for fitting in ("phase", "none"):
         sim = setup()
         E0 = sim.energy()
-        sim.integrator = "pfvi"
-        sim.integrator.epsilon = 0.  # fixed steps of dt
-        sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+        fixed_step_pfvi(sim)
         sim.integrator.fitting = fitting
         sim.dt = T / 10 / 1000
         sim.integrate(T)

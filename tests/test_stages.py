@@ -7,7 +7,7 @@ import rebound
 from numpy.polynomial import legendre
 
 import rebound_pfvi
-from conftest import harmonic_oscillator, oscillator_exact, snapshot, two_body
+from conftest import fixed_step_pfvi, harmonic_oscillator, oscillator_exact, snapshot, two_body
 
 STAGES = (2, 3, 4, 5, 6)
 FITTINGS = ("phase", "phase-literal", "none")
@@ -89,9 +89,7 @@ def anharmonic_sim(s, fitting, omega, q0, v0):
         p.ay = -p.y - 0.4 * r2 * p.y
 
     sim.additional_forces = force
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.integrator.stages = s
     sim.integrator.fitting = fitting
     sim.integrator.frequency = "fixed"
@@ -169,9 +167,7 @@ def kepler_errors(s, fitting, n):
     position error against the exact Kepler position, n steps per orbit."""
     sim = two_body(0.0, e=0.5, com=False)
     orbit = sim.particles[1].orbit(primary=sim.particles[0])
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.integrator.stages = s
     sim.integrator.fitting = fitting
     sim.dt = orbit.P / n
@@ -244,9 +240,7 @@ def test_oscillator_error_of_phase_per_stage(s):
 def star_planet(s, e, steps_per_orbit):
     """m = 1 and 1e-3, a = 1, COM frame, pfvi with s stages."""
     sim = two_body(1e-3, e=e, com=True)
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.integrator.stages = s
     sim.dt = 2 * math.pi / steps_per_orbit
     return sim
@@ -265,9 +259,7 @@ def test_force_evaluations_are_s_minus_1_per_iteration(s):
 
 def test_two_point_steps_count_one_iteration_each():
     sim = two_body(1e-3, e=0.5, com=True)
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.dt = 0.01
     sim.steps(10)
     assert sim.integrator.n_iterations == 10 and sim.integrator.iterations_max == 1
@@ -286,9 +278,7 @@ def nan_at_interior_stage(simp):
 def test_non_finite_force_at_a_stage_point_leaves_the_state_untouched(s):
     sim = two_body(1e-3, e=0.3, com=True)
     sim.additional_forces = nan_at_interior_stage
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.integrator.stages = s
     sim.dt = 0.1
     sim.steps(5)

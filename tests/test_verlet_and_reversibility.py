@@ -3,14 +3,12 @@ import math
 
 import pytest
 
-from conftest import snapshot, two_body
+from conftest import fixed_step_pfvi, snapshot, two_body
 
 
 def test_none_equals_velocity_verlet():
     sim = two_body(1e-3, e=0.5, com=True)
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.integrator.fitting = "none"
     h = 0.01
     sim.dt = h
@@ -52,9 +50,7 @@ def round_trip(sim, n):
 
 def e05_round_trip(fitting, frequency, n):
     sim = two_body(1e-3, e=0.5, com=True)
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.integrator.fitting = fitting
     sim.integrator.frequency = frequency
     sim.integrator.omega = 1.0
@@ -76,9 +72,7 @@ def test_stage_solve_round_trip_returns_to_start(stages, fitting, frequency):
     # symmetric map; the solve is converged to round-off. 10 orbits at e = 0.5,
     # 100 steps per orbit, and back: measured 5.0e-14 to 9.1e-13.
     sim = two_body(1e-3, e=0.5, com=True)
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.integrator.stages = stages
     sim.integrator.fitting = fitting
     sim.integrator.frequency = frequency
@@ -104,9 +98,7 @@ def test_backward_integration_mirrors_forward():
     fwd = two_body(1e-3, e=0.3, com=True)
     bwd = two_body(1e-3, e=0.3, com=True)
     for sim in (fwd, bwd):
-        sim.integrator = "pfvi"
-        sim.integrator.epsilon = 0.  # fixed steps of dt
-        sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+        fixed_step_pfvi(sim)
         sim.dt = 0.01
     for p in bwd.particles:
         p.vx, p.vy, p.vz = -p.vx, -p.vy, -p.vz
@@ -120,9 +112,7 @@ def test_backward_integration_mirrors_forward():
 
 def test_exact_finish_time_lands_on_t():
     sim = two_body(1e-3, e=0.3, com=True)
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = 0.  # fixed steps of dt
-    sim.integrator.stages = 2  # the two-point scheme unless a test sets s
+    fixed_step_pfvi(sim)
     sim.dt = 0.03
     sim.integrate(1.0)
     assert sim.t == 1.0

@@ -245,11 +245,9 @@ PFVI_INTERNAL void pfvi_stages_commit(struct reb_simulation* r, struct pfvi_stat
 
 // pfvi_control.c
 PFVI_INTERNAL void pfvi_osculating_circle(const double v[3], const double a[3], struct pfvi_osculating* c);
-// Whether both ends have circles on the same side of the path (no inflection between).
-PFVI_INTERNAL int pfvi_osculating_comparable(const struct pfvi_osculating* c0, const struct pfvi_osculating* c1);
 // The seed's bound | |R1 - R2| - |O1 - O2| | on the position error of particle
-// i's step, relative to min(R1, R2), less its round-off level *noise (never < 0);
-// 0 where the circles are not comparable.
+// i's step, relative to min(R1, R2), less its round-off level *noise (never < 0).
+// Meaningless across an inflection: pfvi_control.c leaves such particles out.
 PFVI_INTERNAL double pfvi_osculating_error(const struct reb_particle* p0, const struct pfvi_osculating* c0,
         const struct reb_particle* p1, const struct pfvi_osculating* c1, double* noise);
 // Takes one step with the controller of s->step_control; returns the h taken,

@@ -72,7 +72,7 @@ void pfvi_osculating_circle(const double v[3], const double a[3], struct pfvi_os
 // the binormal flips and the circles lie on opposite sides of the path; the
 // estimate is then 2 min(R)/min(R) = 2 however short the step (Burrau's
 // problem refused every step at an inflection), so it says nothing there.
-int pfvi_osculating_comparable(const struct pfvi_osculating* c0, const struct pfvi_osculating* c1){
+static int pfvi_osculating_comparable(const struct pfvi_osculating* c0, const struct pfvi_osculating* c1){
     if (!c0->defined || !c1->defined){
         return 0;
     }
@@ -83,7 +83,7 @@ int pfvi_osculating_comparable(const struct pfvi_osculating* c0, const struct pf
 double pfvi_osculating_error(const struct reb_particle* p0, const struct pfvi_osculating* c0,
         const struct reb_particle* p1, const struct pfvi_osculating* c1, double* noise_out){
     *noise_out = 0.;
-    if (!pfvi_osculating_comparable(c0, c1)){
+    if (!c0->defined || !c1->defined){
         return 0.;
     }
     // O1 - O0 as the step's displacement plus the change of the offsets, so
@@ -140,9 +140,10 @@ static struct control_view control_look(const struct reb_simulation* r, struct p
         struct pfvi_osculating c1;
         pfvi_osculating_circle(v, a, &c1);
         const struct pfvi_osculating* const c0 = &s->osculating_start[i];
-        view.informed |= pfvi_osculating_comparable(c0, &c1);
-        double noise;
-        const double error = pfvi_osculating_error(&s->start[i], c0, &ps[i], &c1, &noise);
+        const int comparable = pfvi_osculating_comparable(c0, &c1);
+        view.informed |= comparable;
+        double noise = 0.;
+        const double error = comparable ? pfvi_osculating_error(&s->start[i], c0, &ps[i], &c1, &noise) : 0.;
         if (error > view.error){
             view.error = error;
             view.noise = noise;
