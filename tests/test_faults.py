@@ -86,7 +86,8 @@ def test_stage_solve_that_cannot_converge_leaves_everything_as_it_was(mode):
         else:
             assert all(math.isfinite(getattr(p, f)) for p in sim.particles for f in ("x", "vx", "ax"))
         return
-    with pytest.raises(RuntimeError, match=r"(did not converge|meets epsilon|not solved).*state restored"):
+    # (or, under the adaptive control, the u bound drives dt so low that dt^2 underflows)
+    with pytest.raises(RuntimeError, match=r"(did not converge|meets epsilon|not solved|dt\^2 underflows).*state restored"):
         sim.steps(1)
     assert snapshot(sim) == before
 
@@ -106,15 +107,4 @@ def test_adaptive_steps_shorten_a_step_whose_stage_solve_fails(mode):
     assert sim.dt_last_done < 0.05
 
 
-def test_force_callback_changing_n_is_reported():
-    sim = running("fixed-s2")
-
-    def remover(simp):
-        if simp.contents.N == 3:
-            sim.remove(2)
-
-    sim.additional_forces = remover
-    t0 = sim.t
-    with pytest.raises(RuntimeError, match=r"number of particles changed from 3 to 2 during a force evaluation"):
-        sim.steps(1)
-    assert sim.t == t0
+# A callback changing N mid-step: tests/test_force_model_changes.py (every particle's bytes).

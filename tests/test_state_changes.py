@@ -134,14 +134,23 @@ def test_switching_from_ias15_mid_run_equals_a_fresh_pfvi_start():
     assert physical_state(sim) == physical_state(fresh)
 
 
-def test_switching_pfvi_options_mid_run_takes_effect_at_the_next_step():
+@pytest.mark.parametrize("name, value", [("stages", 3), ("stages", 6), ("fitting", "none"),
+                                         ("fitting", "phase-literal"), ("frequency", "fixed"),
+                                         ("u_max", 0.005), ("epsilon", 1e-8)])
+def test_switching_pfvi_options_mid_run_takes_effect_at_the_next_step(name, value):
     sim = configure(planets(), "fixed-s2")
+    sim.integrator.omega = 7.0  # used once frequency is "fixed"
     sim.integrate(0.5)
-    for stages in (3, 6, 2, 4):
-        sim.integrator.stages = stages
-        sim.integrate(sim.t + 0.2)
-    sim.integrator.fitting = "none"
-    sim.integrator.epsilon = 1e-8
-    sim.integrate(sim.t + 0.3)
-    assert sim.t == pytest.approx(1.6, abs=1e-15)
-    assert sim.integrator.n_steps > 0
+    kept = sim.copy()  # the same run, options unchanged
+    setattr(sim.integrator, name, value)
+    steps_before = sim.integrator.n_steps
+    sim.integrate(0.7)
+    kept.integrate(0.7)
+    assert sim.t == kept.t == pytest.approx(0.7, abs=1e-15)
+    # The option changed the steps that followed, and only those.
+    assert physical_state(sim) != physical_state(kept)
+    assert getattr(sim.integrator, name) == value
+    if name == "epsilon":
+        assert sim.integrator.n_steps - steps_before != 20  # adaptive, no longer 20 fixed steps of 0.01
+    if name == "u_max":
+        assert sim.integrator.n_u_limited > kept.integrator.n_u_limited

@@ -24,6 +24,14 @@
 // pole of the two-point coefficients: cos u = 0 (all fitted modes) and
 // sin u = 0 away from u = 0 (phase-literal, through gamma = u cot u).
 #define PFVI_POLE_GUARD 1e-3
+// Largest fitted frequency: the two-point step needs omega^2 (and omega^2 q),
+// which leave the doubles above omega ~ 1.3e154. A larger omega (a body
+// almost at rest turning sharply, or u_max/|dt| for a tiny dt) is fitted as 0,
+// the classical scheme, and counted in n_u_limited.
+#define PFVI_OMEGA_MAX 1e150
+// A macro's value as a string, for the field documentation.
+#define PFVI_STR_(x) #x
+#define PFVI_STR(x) PFVI_STR_(x)
 // Fixed-point iterations allowed for the implicit final kick when the force
 // depends on velocities.
 #define PFVI_VDEP_MAX_ITERATIONS 16
@@ -139,6 +147,30 @@ struct pfvi_compensation {
     double v[3];
 };
 
+// Everything besides the particles, N and t that REBOUND's force evaluation
+// reads (gravity.c, boundary.c, the force hooks), kept with the last step's
+// end acceleration: that acceleration is reused only if this is unchanged,
+// bit for bit. Filled by pfvi_force_model_of, padding zeroed, so that it
+// compares with memcmp.
+struct pfvi_force_model {
+    double G;
+    double softening;
+    double opening_angle2;
+    double root_size;
+    size_t N_root[3];
+    double OMEGA;
+    double OMEGAZ;
+    size_t N_active;
+    int gravity;
+    int testparticle_type;
+    int force_is_velocity_dependent;
+    int boundary;
+    int N_ghost[3];
+    void (*additional_forces)(struct reb_simulation* const r);
+    void (*gravity_custom)(struct reb_simulation* const r);
+    void* extras;
+};
+
 // Integrator state. Options and statistics are REBOUND fields (saved in
 // Simulationarchives); the scratch part is not saved and grows only with N.
 struct pfvi_state {
@@ -207,9 +239,19 @@ struct pfvi_state {
     size_t predictor_N;
     double predictor_h;
     double predictor_t;            // t at its end
-    size_t cache_N;                // >0: `end` describes the particles, taken at cache_t with cache_G
+    size_t cache_N;                // >0: `end` describes the particles, taken at cache_t under cache_model
     double cache_t;
-    double cache_G;
+    struct pfvi_force_model cache_model;
+    // Particles added or removed by a callback during a step (a force
+    // evaluation): origin[k] is the index at the step's start of the particle
+    // now at k, or SIZE_MAX for one added since, so that a refused step can
+    // restore every particle that is still there. Tracked only while a step
+    // runs, set up at the first change (the hot path never touches it).
+    int in_step;
+    size_t step_N;
+    size_t* origin;
+    size_t origin_N;
+    size_t origin_allocated;
 };
 
 // pfvi_fitting.c
@@ -264,6 +306,19 @@ PFVI_INTERNAL int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi
 PFVI_INTERNAL int pfvi_particle_finite(const struct reb_particle* p);
 
 // pfvi_frequency.c
+// The curvature of a path with velocity v and acceleration a, computed from
+// v and a scaled by powers of two, so that no intermediate over- or
+// underflows: omega = |v x a|/|v|^2, R = |v|^3/|v x a| (each may still be 0
+// or Inf where the true value lies outside the doubles), and the unit normal
+// (towards the centre) and binormal. Returns 0, with omega = 0 and R = Inf,
+// at rest or on a straight line.
+struct pfvi_curvature {
+    double omega;
+    double R;
+    double normal[3];
+    double binormal[3];
+};
+PFVI_INTERNAL int pfvi_curvature_scaled(const double v[3], const double a[3], struct pfvi_curvature* k);
 PFVI_INTERNAL double pfvi_curvature_frequency(const double v[3], const double a[3]);
 // The omega a step fits particle p to (before limiting): 0 for fitting "none",
 // the field omega for frequency "fixed", else the curvature frequency.

@@ -38,6 +38,27 @@
 #include <math.h>
 #include "pfvi.h"
 
+// The circle where the squares of v or v x a leave the doubles' range.
+static void pfvi_osculating_circle_scaled(const double v[3], const double a[3], struct pfvi_osculating* c){
+    struct pfvi_curvature k;
+    c->defined = 0;
+    c->omega = 0.;
+    c->R = INFINITY;
+    if (!pfvi_curvature_scaled(v, a, &k)){
+        return;
+    }
+    c->omega = k.omega;
+    for (int i=0; i<3; i++){
+        c->offset[i] = k.R*k.normal[i];
+        c->binormal[i] = k.binormal[i];
+    }
+    if (isfinite(k.R) && k.omega > 0. && isfinite(k.omega)
+            && isfinite(c->offset[0]) && isfinite(c->offset[1]) && isfinite(c->offset[2])){
+        c->R = k.R;
+        c->defined = 1;
+    }
+}
+
 void pfvi_osculating_circle(const double v[3], const double a[3], struct pfvi_osculating* c){
     const double v2 = v[0]*v[0] + v[1]*v[1] + v[2]*v[2];
     const double w[3] = {v[1]*a[2] - v[2]*a[1], v[2]*a[0] - v[0]*a[2], v[0]*a[1] - v[1]*a[0]};
@@ -45,8 +66,11 @@ void pfvi_osculating_circle(const double v[3], const double a[3], struct pfvi_os
     c->defined = 0;
     c->omega = 0.;
     c->R = INFINITY;
-    if (!(v2 > 0. && w2 > 0.)){
-        return;  // at rest or on a straight line: no circle, omega = 0
+    if (!(v2 > 0. && w2 > 0. && v2 <= DBL_MAX && w2 <= DBL_MAX)){
+        // At rest or on a straight line (no circle, omega = 0), or the
+        // squares left the doubles' range.
+        pfvi_osculating_circle_scaled(v, a, c);
+        return;
     }
     const double R = v2*sqrt(v2)/sqrt(w2);
     // (v x a) x v points from x to the centre.
@@ -61,10 +85,12 @@ void pfvi_osculating_circle(const double v[3], const double a[3], struct pfvi_os
     c->binormal[1] = w[1]/w_norm;
     c->binormal[2] = w[2]/w_norm;
     if (isfinite(R) && isfinite(c->omega) && isfinite(c->offset[0]) && isfinite(c->offset[1])
-            && isfinite(c->offset[2])){
+            && isfinite(c->offset[2]) && v2 >= DBL_MIN && w2 >= DBL_MIN && c->omega > 0.){
         c->R = R;
         c->defined = 1;
+        return;
     }
+    pfvi_osculating_circle_scaled(v, a, c);
 }
 
 // Whether the circles at the two ends bound anything. Across an inflection

@@ -35,12 +35,18 @@ static double sinc(double u, double sin_u){
 enum pfvi_fit_status pfvi_limit_u(double* omega, double h, double u_max, double* u){
     *u = (*omega)*h;
     // Written as !(<=) so that a NaN or Inf frequency estimate is limited too.
+    enum pfvi_fit_status status = PFVI_FIT_OK;
     if (!(fabs(*u) <= u_max)){
         *u = copysign(u_max, h);
         *omega = u_max/fabs(h);
-        return PFVI_FIT_LIMITED;
+        status = PFVI_FIT_LIMITED;
     }
-    return PFVI_FIT_OK;
+    if (*omega > PFVI_OMEGA_MAX){
+        *omega = 0.;
+        *u = 0.;
+        status = PFVI_FIT_LIMITED;
+    }
+    return status;
 }
 
 enum pfvi_fit_status pfvi_two_point_fit(double omega, double h, double u_max, int literal, struct pfvi_two_point* fit){

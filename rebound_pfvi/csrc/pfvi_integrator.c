@@ -17,6 +17,9 @@
 #include "rebound_internal.h"
 
 static void pfvi_step(struct reb_simulation* r, void* state);
+static void pfvi_synchronize(struct reb_simulation* r, void* state);
+static void pfvi_did_add_particle(struct reb_simulation* r);
+static void pfvi_will_remove_particle(struct reb_simulation* r, size_t index);
 static void* pfvi_create(void);
 static void pfvi_free(void* state);
 static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[];
@@ -42,12 +45,19 @@ const struct reb_integrator pfvi_integrator = {
     "the position error (section 4) sets them, time-symmetrically (step_control = "
     "'reversible') or by accept/reject ('seed'); epsilon = 0 gives fixed steps of sim.dt. "
     "Forward or backward. A step that cannot be taken "
-    "(invalid option, non-finite particle or force, u at a pole) raises an error "
-    "and leaves t and every particle bit-identical. See docs/method.md."
+    "(invalid option, non-finite particle or force, overflow, u at a pole) raises an error "
+    "and leaves t and every particle bit-identical; if a force callback added or removed "
+    "particles during the step, t and every particle still present are restored and the "
+    "error says how many were removed or added. Changes of the force model between "
+    "integrate() or steps() calls or in a heartbeat act from the next step on, exactly as "
+    "a fresh integrate() from that state. See docs/method.md."
     ,
     .step = pfvi_step,
+    .synchronize = pfvi_synchronize,
     .create = pfvi_create,
     .free = pfvi_free,
+    .did_add_particle = pfvi_did_add_particle,
+    .will_remove_particle = pfvi_will_remove_particle,
     .field_descriptor_list = pfvi_field_descriptor_list,
 };
 
@@ -132,9 +142,15 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "predictor_h", offsetof(struct pfvi_state, predictor_h), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_t", offsetof(struct pfvi_state, predictor_t), 0, 0, 0 },
     PFVI_FIELD("Statistic: steps taken by this integrator.", REB_UINT64, n_steps),
-    PFVI_FIELD("Statistic: particle-steps in which u = omega*dt exceeded u_max and was limited.",
+    PFVI_FIELD("Statistic: particle-steps in which u = omega*dt exceeded u_max and was limited, "
+        "or omega exceeded " PFVI_STR(PFVI_OMEGA_MAX) " (omega^2 beyond the doubles) and the particle "
+        "was stepped unfitted.",
         REB_UINT64, n_u_limited),
-    PFVI_FIELD("Statistic: force evaluations (calls of reb_simulation_update_acceleration).",
+    PFVI_FIELD("Statistic: force evaluations (calls of reb_simulation_update_acceleration). A step "
+        "reuses the last step's end acceleration only within one integrate() or steps() call, with no "
+        "heartbeat set and nothing the force reads changed (particles, t, G, softening, N_active, "
+        "testparticle_type, gravity mode, boundary, additional_forces, extras); otherwise it evaluates "
+        "it afresh.",
         REB_UINT64, n_force_evaluations),
     PFVI_FIELD("Statistic: iterations of the stage solve, summed over steps (1 per two-point step).",
         REB_UINT64, n_iterations),
@@ -193,6 +209,7 @@ static void pfvi_free(void* state){
     free(s->osculating_start);
     free(s->unknowns);
     free(s->unknowns_next);
+    free(s->origin);
     free(s);
 }
 
@@ -320,10 +337,37 @@ int pfvi_particle_finite(const struct reb_particle* p){
         && isfinite(p->vx) && isfinite(p->vy) && isfinite(p->vz) && isfinite(p->m);
 }
 
-// Whether the particles, N, t and G are, bit for bit, those the last step ended with.
+static struct pfvi_force_model pfvi_force_model_of(const struct reb_simulation* r){
+    struct pfvi_force_model m;
+    memset(&m, 0, sizeof(m));
+    m.G = r->G;
+    m.softening = r->softening;
+    m.opening_angle2 = r->opening_angle2;
+    m.root_size = r->root_size;
+    m.N_root[0] = r->N_root_x; m.N_root[1] = r->N_root_y; m.N_root[2] = r->N_root_z;
+    m.OMEGA = r->OMEGA;
+    m.OMEGAZ = r->OMEGAZ;
+    m.N_active = r->N_active;
+    m.gravity = (int)r->gravity;
+    m.testparticle_type = r->testparticle_type;
+    m.force_is_velocity_dependent = r->force_is_velocity_dependent;
+    m.boundary = (int)r->boundary;
+    m.N_ghost[0] = r->N_ghost_x; m.N_ghost[1] = r->N_ghost_y; m.N_ghost[2] = r->N_ghost_z;
+    m.additional_forces = r->additional_forces;
+    m.gravity_custom = r->gravity_custom;
+    m.extras = r->extras;
+    return m;
+}
+
+// Whether the particles, N, t and the force model are, bit for bit, those the
+// last step ended with.
 static int pfvi_end_is_start(const struct reb_simulation* r, const struct pfvi_state* s){
     const size_t N = r->N;
-    if (s->cache_N != N || s->cache_t != r->t || s->cache_G != r->G){
+    if (s->cache_N != N || s->cache_t != r->t){
+        return 0;
+    }
+    const struct pfvi_force_model model = pfvi_force_model_of(r);
+    if (memcmp(&model, &s->cache_model, sizeof(model))){
         return 0;
     }
     const struct reb_particle* const ps = r->particles;
@@ -365,26 +409,129 @@ void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* s, size_t N, do
     s->cache_N = 0;
 }
 
+// REBOUND synchronizes at the end of steps() and integrate() and around
+// pre- and post-timestep modifications: user code may run next and change
+// what the force depends on where no field shows it (a callback's own
+// variables, REBOUNDx parameters), so the next step evaluates its start force
+// afresh, as a new integrate() would.
+static void pfvi_synchronize(struct reb_simulation* r, void* state){
+    (void)r;
+    struct pfvi_state* const s = state;
+    if (s){
+        s->cache_N = 0;
+    }
+}
+
+enum { PFVI_STEP_IDLE = 0, PFVI_STEP_RUNNING = 1, PFVI_STEP_TRACKING = 2, PFVI_STEP_UNTRACKED = 3 };
+
+// Room for n entries of origin. Only a callback that adds or removes
+// particles during a step gets here, never the hot path.
+static int pfvi_origin_reserve(struct pfvi_state* s, size_t n){
+    if (n <= s->origin_allocated){
+        return 1;
+    }
+    size_t* const grown = realloc(s->origin, n*sizeof(*grown));
+    if (!grown){
+        s->in_step = PFVI_STEP_UNTRACKED;
+        return 0;
+    }
+    s->origin = grown;
+    s->origin_allocated = n;
+    return 1;
+}
+
+// The state to track a change of N in, if a step is running: at the first
+// change, origin becomes the identity over the step's particles.
+static struct pfvi_state* pfvi_origin_tracking(struct reb_simulation* r){
+    struct pfvi_state* const s = r->integrator.state;
+    if (!s || s->in_step == PFVI_STEP_IDLE || s->in_step == PFVI_STEP_UNTRACKED){
+        return NULL;
+    }
+    if (s->in_step == PFVI_STEP_RUNNING){
+        if (!pfvi_origin_reserve(s, s->step_N + 1)){
+            return NULL;
+        }
+        for (size_t i=0; i<s->step_N; i++){
+            s->origin[i] = i;
+        }
+        s->origin_N = s->step_N;
+        s->in_step = PFVI_STEP_TRACKING;
+    }
+    return s;
+}
+
+static void pfvi_did_add_particle(struct reb_simulation* r){
+    struct pfvi_state* const s = pfvi_origin_tracking(r);
+    if (s && pfvi_origin_reserve(s, s->origin_N + 1)){
+        s->origin[s->origin_N++] = SIZE_MAX;  // REBOUND appends
+    }
+}
+
+static void pfvi_will_remove_particle(struct reb_simulation* r, size_t index){
+    struct pfvi_state* const s = pfvi_origin_tracking(r);
+    if (s && index < s->origin_N){  // REBOUND refuses an index out of range
+        memmove(&s->origin[index], &s->origin[index + 1], (s->origin_N - index - 1)*sizeof(*s->origin));
+        s->origin_N--;
+    }
+}
+
+// A callback added or removed particles during a force evaluation: t and
+// every particle still there go back to the step's start; the removed ones
+// are gone and the added ones stay as added (the callback's doing).
+static void pfvi_roll_back_changed_N(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0){
+    const size_t now = r->N;
+    const double t = r->t;
+    r->t = t0;
+    s->cache_N = 0;
+    if (s->in_step != PFVI_STEP_TRACKING || s->origin_N != now){
+        pfvi_error(r, "pfvi: a callback changed the number of particles from %zu to %zu during the force "
+                "evaluation at t = %.17g; step not taken, t restored, but the particles could not be "
+                "(out of memory): they are left mid-step.", N, now, t);
+        return;
+    }
+    size_t kept = 0, added = 0;
+    for (size_t k=0; k<now; k++){
+        if (s->origin[k] == SIZE_MAX){
+            added++;
+        }else{
+            r->particles[k] = s->start[s->origin[k]];
+            kept++;
+        }
+    }
+    pfvi_error(r, "pfvi: a callback changed the number of particles from %zu to %zu during the force "
+            "evaluation at t = %.17g; step not taken: t and the %zu particles still present are restored "
+            "to the step's start, %zu removed are gone, %zu added are kept.", N, now, t, kept, N - kept, added);
+}
+
 // Evaluates forces through REBOUND, so that every gravity mode, additional
 // forces (REBOUNDx) and test particles are handled there. Returns 0, having
-// rolled back, if the forces are not finite or the callback changed N.
+// rolled back, if the forces are not finite or a callback changed N.
 int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* s, size_t N, double t0){
     reb_simulation_update_acceleration(r);
     s->n_force_evaluations++;
     if (r->N != N){
-        // The particle array may have been reallocated: it cannot be rolled back.
-        s->cache_N = 0;
-        r->t = t0;
-        pfvi_error(r, "pfvi: the number of particles changed from %zu to %zu during a force evaluation.", N, r->N);
+        pfvi_roll_back_changed_N(r, s, N, t0);
         return 0;
     }
     const struct reb_particle* const ps = r->particles;
     for (size_t i=0; i<N; i++){
         if (!(isfinite(ps[i].ax) && isfinite(ps[i].ay) && isfinite(ps[i].az))){
             const double t = r->t;
+            // A position or velocity that overflowed in the step is the cause
+            // to name, not the force it produced.
+            size_t j = 0;
+            while (j < N && pfvi_particle_finite(&ps[j])){
+                j++;
+            }
+            const int position = (j < N) && !(isfinite(ps[j].x) && isfinite(ps[j].y) && isfinite(ps[j].z));
             pfvi_roll_back(r, s, N, t0);
-            pfvi_error(r, "pfvi: the force on particle %zu is not finite at t = %.17g (two particles at one position? "
-                    "an additional force returning NaN or Inf?); step not taken, state restored.", i, t);
+            if (j < N){
+                pfvi_error(r, "pfvi: particle %zu's %s overflowed (not finite) within the step from t = %.17g; "
+                        "step not taken, state restored. Lower dt (or u_max).", j, position ? "position" : "velocity", t0);
+            }else{
+                pfvi_error(r, "pfvi: the force on particle %zu is not finite at t = %.17g (two particles at one "
+                        "position? an additional force returning NaN or Inf?); step not taken, state restored.", i, t);
+            }
             return 0;
         }
     }
@@ -581,12 +728,7 @@ void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* s, size_t N, 
     s->omega_max = s->trial_omega_max;
 }
 
-static void pfvi_step(struct reb_simulation* r, void* state){
-    struct pfvi_state* const s = state;
-    if (!s){
-        reb_simulation_error(r, "pfvi: integrator state missing (allocation failed).");
-        return;
-    }
+static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* s){
     if (!pfvi_options_valid(r, s)){
         return;
     }
@@ -613,9 +755,12 @@ static void pfvi_step(struct reb_simulation* r, void* state){
 
     // e[i].a becomes the acceleration at the start of this step. It is kept
     // from the last step unless anything may have changed the forces: a new
-    // integrate() call (REBOUND resets dt_last_done to 0), velocity-dependent
-    // forces, or any bit of N, t, G, a position, velocity or mass.
-    const int reuse = r->dt_last_done != 0. && !r->force_is_velocity_dependent && pfvi_end_is_start(r, s);
+    // integrate() or steps() call (REBOUND resets dt_last_done to 0, or
+    // synchronizes at the end of the last), a heartbeat (it may change
+    // anything), velocity-dependent forces, or any bit of N, t, the force
+    // model (pfvi_force_model_of), a position, velocity or mass.
+    const int reuse = r->dt_last_done != 0. && !r->force_is_velocity_dependent && !r->heartbeat
+        && pfvi_end_is_start(r, s);
     if (!reuse){
         // Checked before anything is changed, so that a refusal leaves the
         // integrator's own state as it was too.
@@ -643,6 +788,12 @@ static void pfvi_step(struct reb_simulation* r, void* state){
     }
     for (size_t i=0; i<N; i++){
         s->omega_fit[i] = pfvi_step_frequency(s, &p0[i], e[i].a);
+        if (isnan(s->omega_fit[i])){
+            pfvi_roll_back(r, s, N, t0);
+            pfvi_error(r, "pfvi: particle %zu: its curvature frequency |v x a|/|v|^2 is not a number at t = %.17g; "
+                    "step not taken, state restored.", i, t0);
+            return;
+        }
     }
 
     double h;
@@ -682,7 +833,19 @@ static void pfvi_step(struct reb_simulation* r, void* state){
     }
     s->cache_N = N;
     s->cache_t = r->t;
-    s->cache_G = r->G;
+    s->cache_model = pfvi_force_model_of(r);
+}
+
+static void pfvi_step(struct reb_simulation* r, void* state){
+    struct pfvi_state* const s = state;
+    if (!s){
+        reb_simulation_error(r, "pfvi: integrator state missing (allocation failed).");
+        return;
+    }
+    s->in_step = PFVI_STEP_RUNNING;
+    s->step_N = r->N;
+    pfvi_step_take(r, s);
+    s->in_step = PFVI_STEP_IDLE;
 }
 
 int pfvi_register(void){

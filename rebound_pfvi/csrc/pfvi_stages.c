@@ -184,6 +184,14 @@ enum pfvi_trial pfvi_stages_trial(struct reb_simulation* r, struct pfvi_state* s
     const int s = q->s, m = s - 1;
     struct reb_particle* const ps = r->particles;
     struct reb_particle* const p0 = st->start;
+    if (!(h*h >= DBL_MIN)){
+        // The stage equations carry h^2 a: below |h| ~ 1.5e-154 it underflows
+        // and the velocity change h a = (h^2 a)/h is lost.
+        pfvi_roll_back(r, st, N, t0);
+        pfvi_error(r, "pfvi: dt = %.3g: dt^2 underflows (|dt| below 1.5e-154), which the %d-stage equations "
+                "cannot carry; step not taken, state restored. Use stages = 2 or larger time units.", h, s);
+        return PFVI_TRIAL_ERROR;
+    }
 
     // Fit every particle before anything is written. Particles sharing u
     // (all of them for "none" or a fixed omega) share the work.
