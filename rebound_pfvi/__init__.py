@@ -34,6 +34,34 @@ FREQUENCIES = ("curvature", "fixed")
 STAGES = (2, 3, 4, 5, 6)
 
 
+def _show_options_and_statistics():
+    """repr(sim.integrator) for "pfvi": its documented fields (options, then
+    statistics), not the scratch saved for archives (compensation, the
+    predictor's stage accelerations: pointers). REBOUND's own repr lists every
+    field; it is kept for every other integrator."""
+    from rebound.integrator import IntegratorConfiguration
+
+    generic = IntegratorConfiguration.__repr__
+    if getattr(generic, "_pfvi", False):
+        return
+
+    def __repr__(self):
+        if self.name != INTEGRATOR_NAME.encode():
+            return generic(self)
+        shown = [f"name={INTEGRATOR_NAME}"]
+        for fd in self.callbacks.field_descriptor_list:
+            if fd.documentation:
+                name = fd.name.decode()
+                shown.append(f"{name}={getattr(self, name)}")
+        return f"<{type(self).__module__}.{type(self).__name__} object at {hex(id(self))}, {', '.join(shown)}>"
+
+    __repr__._pfvi = True
+    IntegratorConfiguration.__repr__ = __repr__
+
+
+_show_options_and_statistics()
+
+
 def _check_stages(s):
     if s not in STAGES:
         raise ValueError(f"s={s!r} is not valid; allowed: {', '.join(map(str, STAGES))}")

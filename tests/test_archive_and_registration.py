@@ -155,7 +155,7 @@ def test_documentation_lists_every_field():
     sim = rebound.Simulation()
     sim.integrator = "pfvi"
     doc = " ".join(sim.integrator.__doc__.split())
-    assert "Kosmas & Vlachos, \"Phase-fitted Discrete Lagrangian Integrators\"" in doc
+    assert "Kosmas and D. S. Vlachos, \"Phase-fitted Discrete Lagrangian Integrators\"" in doc
     for field in ("fitting", "frequency", "omega", "stages", "u_max", "epsilon", "step_control",
                   "n_steps", "n_u_limited", "n_force_evaluations", "n_iterations", "iterations_max",
                   "iterations_mean", "n_rejected", "n_attempts", "n_asymmetric", "error_estimate",

@@ -38,6 +38,7 @@
 // Gauss-Lobatto discrete Lagrangians with interior corrections (seed section 6).
 #define PFVI_STAGES_MIN 2
 #define PFVI_STAGES_MAX 6
+#define PFVI_STAGES_DEFAULT 4
 // The stage solve: fixed-point iterations per step at most, and the largest
 // relative change of the stage values at which a solve that stops decreasing
 // is accepted as converged to round-off (larger: the step is refused).

@@ -26,8 +26,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
 
 const struct reb_integrator pfvi_integrator = {
     .documentation =
-    "PFVI: phase-fitted discrete Lagrangian (variational) integrator of Kosmas & "
-    "Vlachos, \"Phase-fitted Discrete Lagrangian Integrators\". The discrete "
+    "PFVI: phase-fitted discrete Lagrangian (variational) integrator of O. T. Kosmas and "
+    "D. S. Vlachos, \"Phase-fitted Discrete Lagrangian Integrators\" (below: K&V). The discrete "
     "Lagrangian Ld = h sum_j w_j L(q^j, qdot^j) interpolates each particle's path "
     "with trigonometric functions fitted to a local frequency omega, so that the "
     "harmonic oscillator at omega is integrated exactly. The frequency is either "
@@ -37,12 +37,13 @@ const struct reb_integrator pfvi_integrator = {
     "With two nodes (stages = 2) the step is explicit and second order, needs one "
     "force evaluation (the acceleration at the end of a step is reused at the start "
     "of the next), and with fitting = 'none' is exactly velocity Verlet. With s = 3 "
-    "to 6 Gauss-Lobatto nodes and interior corrections (seed section 6; Marsden & "
-    "West 2001, section 2.6) the order is 2s - 2 and each step solves for the stage "
+    "to 6 Gauss-Lobatto nodes and interior corrections (K&V, 'Increasing the algebraic "
+    "order'; Marsden & West 2001, section 2.6) the order is 2s - 2 and each step solves for the stage "
     "points by fixed-point iteration, stopped as in IRKGL16 (Antonana, Makazaga & "
     "Murua 2017, J. Comput. Phys.); a solve that does not converge is refused. "
-    "Steps are adaptive by default (epsilon = 1e-6): the seed's osculating-circle bound on "
-    "the position error (section 4) sets them, time-symmetrically (step_control = "
+    "Steps are adaptive by default (epsilon = " PFVI_STR(PFVI_EPSILON_DEFAULT) "): K&V's "
+    "osculating-circle bound on the position error ('Frequency Evaluation and Error Control') "
+    "sets them, time-symmetrically (step_control = "
     "'reversible') or by accept/reject ('seed'); epsilon = 0 gives fixed steps of sim.dt. "
     "Forward or backward. A step that cannot be taken "
     "(invalid option, non-finite particle or force, overflow, u at a pole) raises an error "
@@ -50,7 +51,9 @@ const struct reb_integrator pfvi_integrator = {
     "particles during the step, t and every particle still present are restored and the "
     "error says how many were removed or added. Changes of the force model between "
     "integrate() or steps() calls or in a heartbeat act from the next step on, exactly as "
-    "a fresh integrate() from that state. See docs/method.md."
+    "a fresh integrate() from that state. Options are checked, by name, when the next step "
+    "starts (REBOUND offers no hook on assignment): a bad value makes integrate() raise and "
+    "changes nothing. Derivations and measurements: the docs/ folder of rebound_pfvi's source."
     ,
     .step = pfvi_step,
     .synchronize = pfvi_synchronize,
@@ -84,54 +87,66 @@ static struct reb_binarydata_enum_descriptor pfvi_frequency_enum[] = {
     { doc, dtype, #name, offsetof(struct pfvi_state, name), 0, 0, 0 }
 
 static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[] = {
-    { "Fitting of the discrete Lagrangian. 'phase' (default): the seed's phase-fitted "
+    { "Fitting of the discrete Lagrangian. 'phase' (default): K&V's phase-fitted "
       "Ld divided by gamma(u) = u cot u, which makes positions and momenta exact on the "
-      "harmonic oscillator. 'phase-literal': Ld exactly as printed in the seed; positions "
+      "harmonic oscillator (two nodes). 'phase-literal': Ld exactly as printed by K&V; positions "
       "are exact on the oscillator but momenta come out scaled by gamma(u). 'none': the "
-      "classical trapezoidal Ld of Marsden & West (velocity Verlet).",
+      "classical trapezoidal Ld of Marsden & West (velocity Verlet), and for stages >= 3 the "
+      "classical Lobatto Ld. Type: text (REBOUND lists its storage type). Default 'phase'.",
       REB_INT, "fitting", offsetof(struct pfvi_state, fitting), 0, 0, pfvi_fitting_enum },
     { "Source of the frequency omega. 'curvature' (default): per particle, omega = "
-      "|v x a|/|v|^2 at the start of the step, in the simulation frame (seed section 4); "
-      "0 for a particle at rest. 'fixed': the field omega, for every particle.",
+      "|v x a|/|v|^2 at the start of the step, in the simulation frame (K&V, 'Frequency "
+      "Evaluation and Error Control'); 0 for a particle at rest or on a straight line. 'fixed': "
+      "the field omega, for every particle. Type: text. Default 'curvature'.",
       REB_INT, "frequency", offsetof(struct pfvi_state, frequency), 0, 0, pfvi_frequency_enum },
     PFVI_FIELD("Frequency used when frequency = 'fixed' (code units of 1/time, finite, >= 0). Default 0.",
         REB_DOUBLE, omega),
-    PFVI_FIELD("Number s of Gauss-Lobatto nodes of the discrete Lagrangian, 2 to 6; the order is "
+    PFVI_FIELD("Number s of Gauss-Lobatto nodes of the discrete Lagrangian, an integer from "
+        PFVI_STR(PFVI_STAGES_MIN) " to " PFVI_STR(PFVI_STAGES_MAX) "; the order is "
         "2s - 2. s = 2: nodes 0 and 1, an explicit step with one force evaluation; with "
         "'phase' it is unstable for a body whose force ignores its own position (the star in a "
-        "centre-of-mass frame), see docs/method.md. s = 4 (default): order 6, stable there. "
-        "s >= 3: interior corrections delta q^j made stationary (seed section 6), solved by "
+        "centre-of-mass frame: its offset from the origin grows by 1/cos u per step). s = 4 "
+        "(default): order 6, stable there. s >= 3: interior corrections delta q^j made stationary "
+        "(K&V, 'Increasing the algebraic order'), solved by "
         "fixed-point iteration with s - 1 force evaluations per iteration (s if forces depend "
-        "on velocities).",
+        "on velocities), at most " PFVI_STR(PFVI_STAGE_MAX_ITERATIONS) " iterations per step. "
+        "Default " PFVI_STR(PFVI_STAGES_DEFAULT) ".",
         REB_INT, stages),
     PFVI_FIELD("Largest |u| = omega*|dt| used in the fitted coefficients; a larger value is "
         "limited to u_max and counted in n_u_limited. Must lie in (0, pi). The two-point "
         "coefficients have a pole at u = pi/2 (and, for 'phase-literal', at pi): a step whose "
-        "u lies within 1e-3 of one is refused. Default 1.0, where tan(u)/u = 1.56. For s >= 3 "
+        "u lies within " PFVI_STR(PFVI_POLE_GUARD) " of one is refused. Default "
+        PFVI_STR(PFVI_U_MAX_DEFAULT) ", where tan(u)/u = 1.56. For s >= 3 "
         "the stage matrix is regular on (0, pi) except for s = 4 at u = 2.857; steps where its "
-        "determinant falls below 1e-3 of its value at u = 0 are refused.",
+        "determinant falls below " PFVI_STR(PFVI_POLE_GUARD) " of its value at u = 0 are refused.",
         REB_DOUBLE, u_max),
-    PFVI_FIELD("Tolerance of the adaptive step control (seed section 4): the bound "
+    PFVI_FIELD("Tolerance of the adaptive step control (K&V, 'Frequency Evaluation and Error "
+        "Control'): the bound "
         "| |R1 - R2| - |O1 - O2| | on a step's position error from the osculating circles "
         "(radius R, centre O) at its two ends, relative to the smaller radius, for the particle "
         "where it is largest; on non-planar paths the centre's motion out of the circles' mean "
-        "plane (torsion, not error) is left out. A particle without circles at both ends on the same side "
+        "plane (torsion, not error) is left out. The estimate is third order in dt whatever the "
+        "order of the scheme. A particle without circles at both ends on the same side "
         "of its path (at rest, on a straight or radial path, or across an inflection) is left out of "
-        "that step's estimate; with no particle left the step is held, at most sim.dt "
-        "(docs/stability.md). 0: fixed steps of sim.dt. Default 1e-6 (docs/adaptive.md). The "
+        "that step's estimate; with no particle left the step is held, at most sim.dt (so on a "
+        "radial path the accuracy is sim.dt's). 0: fixed steps of sim.dt. Default "
+        PFVI_STR(PFVI_EPSILON_DEFAULT) ". The "
         "step is also kept at u = omega*|dt| <= u_max. sim.dt is the first step tried and, "
         "after each step, the next one proposed, as with IAS15.",
         REB_DOUBLE, epsilon),
     { "Step selection when epsilon > 0. 'seed': a step is accepted if the estimate "
       "is at most epsilon, otherwise retried shorter (counted in n_rejected, nothing changed); "
-      "the next step is h*0.9*(epsilon/estimate)^(1/3), at most 2x and at least 0.1x larger. "
-      "'reversible' (default): each step solves estimate(start, end) = epsilon (or u = u_max) for h, and "
+      "the next step is h*" PFVI_STR(PFVI_CONTROL_SAFETY) "*(epsilon/estimate)^(1/"
+      PFVI_STR(PFVI_CONTROL_ORDER) "), at most " PFVI_STR(PFVI_CONTROL_GROW_MAX) "x and at least "
+      PFVI_STR(PFVI_CONTROL_SHRINK_MIN) "x larger; a step rejected " PFVI_STR(PFVI_CONTROL_MAX_REJECTIONS)
+      " times is refused. 'reversible' (default): each step solves estimate(start, end) = epsilon (or "
+      "u = u_max) for h, and "
       "is fitted to the mean of the curvature frequencies at its two ends, so the step chosen "
       "from either end is the same: time-symmetric, as in Hut, Makino & McMillan 1995 (ApJ 443, "
       "L93). It costs about 3 to 5 trial steps per step (n_attempts). Near pericentre and "
       "apocentre the estimate is not monotonic in h and the two directions may pick different "
-      "steps, so a round trip is not exact; energy errors stay bounded where 'seed' drifts "
-      "(docs/adaptive.md).",
+      "steps, so a round trip is not exact; energy errors stay bounded where 'seed' drifts. "
+      "Type: text. Default 'reversible'.",
       REB_INT, "step_control", offsetof(struct pfvi_state, step_control), 0, 0, pfvi_step_control_enum },
     { "", REB_POINTER, "compensation", offsetof(struct pfvi_state, compensation),
         offsetof(struct pfvi_state, N_compensation), sizeof(struct pfvi_compensation), 0 },
@@ -162,7 +177,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "solve did not converge and was retried shorter).", REB_UINT64, n_rejected),
     PFVI_FIELD("Statistic: trial steps, taken or not (the work done: n_attempts / n_steps per step).",
         REB_UINT64, n_attempts),
-    PFVI_FIELD("Statistic: 'reversible' steps whose step equation was not solved in 40 trial "
+    PFVI_FIELD("Statistic: 'reversible' steps whose step equation was not solved in "
+        PFVI_STR(PFVI_REVERSIBLE_MAX_TRIALS) " trial "
         "steps and that were taken at the largest step tried meeting epsilon (not time-symmetric).",
         REB_UINT64, n_asymmetric),
     PFVI_FIELD("Statistic: the step control's error estimate for the last step taken "
@@ -181,7 +197,7 @@ static void* pfvi_create(void){
     }
     s->fitting = PFVI_FITTING_PHASE;
     s->frequency = PFVI_FREQUENCY_CURVATURE;
-    s->stages = 4;
+    s->stages = PFVI_STAGES_DEFAULT;
     s->omega = 0.;
     s->u_max = PFVI_U_MAX_DEFAULT;
     s->epsilon = PFVI_EPSILON_DEFAULT;
