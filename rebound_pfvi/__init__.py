@@ -23,13 +23,23 @@ import ctypes as _ctypes
 from ._core import INTEGRATOR_NAME, lib as _lib
 
 __version__ = "0.1.0"
-__all__ = ["INTEGRATOR_NAME", "FITTINGS", "FREQUENCIES", "STAGES", "seed_coefficients", "gamma",
+__all__ = ["INTEGRATOR_NAME", "FITTINGS", "FREQUENCIES", "STEP_CONTROLS", "STAGES", "seed_coefficients", "gamma",
            "two_point_coefficients", "lobatto", "stage_coefficients"]
 
+def _option_values(field):
+    """The values of an option, from the C core's one list of them."""
+    names = []
+    while (name := _lib.pfvi_option_value_name(field.encode(), len(names))) is not None:
+        names.append(name.decode())
+    return tuple(names)
+
+
 #: Values of the ``fitting`` field, in the order of the C enum.
-FITTINGS = ("phase", "phase-literal", "none")
+FITTINGS = _option_values("fitting")
 #: Values of the ``frequency`` field, in the order of the C enum.
-FREQUENCIES = ("curvature", "fixed")
+FREQUENCIES = _option_values("frequency")
+#: Values of the ``step_control`` field, in the order of the C enum.
+STEP_CONTROLS = _option_values("step_control")
 #: Allowed values of the ``stages`` field.
 STAGES = (2, 3, 4, 5, 6)
 

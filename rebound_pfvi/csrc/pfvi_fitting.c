@@ -1,7 +1,7 @@
 /**
  * pfvi_fitting.c: coefficients of the phase-fitted discrete Lagrangian.
  *
- * The seed (section 3) interpolates the stage points and velocities as
+ * K&V (section 3) interpolates the stage points and velocities as
  *     q^j    = b^j q_k + bbar^j q_k+1,
  *     qdot^j = (B^j q_k + Bbar^j q_k+1) / h,
  * with coefficients fitted so that the test Lagrangian (the harmonic
@@ -20,8 +20,18 @@
  * Verlet, bit for bit. The form has no 0/0 at u -> 0 and no pole at u = pi
  * for "phase"; its pole is cos u = 0, where the trapezoidal rule makes
  * d^2 Ld / dq_k dq_k+1 vanish.
+ *
+ * The s-point scheme (K&V, "Increasing the algebraic order") uses the same
+ * coefficients at every Gauss-Lobatto node:
+ *     b = sin((1-c)u)/sin u,       bbar = sin(cu)/sin u,
+ *     B = -u cos((1-c)u)/sin u,    Bbar = u cos(cu)/sin u,
+ * and the combinations the step needs without cancellation,
+ *     beta_m = b + bbar - 1 = 2 sin(cu/2) sin((1-c)u/2) / cos(u/2),
+ *     beta_d = B + Bbar     = -u sin((2c-1)u/2) / cos(u/2),
+ * with the matrix of the linear part of its stage equations (pfvi_stages.c).
  */
 #include <math.h>
+#include <string.h>
 #include "pfvi.h"
 
 // sin(u)/u; the series keeps u = 0 exact and costs nothing for tiny u.
@@ -49,12 +59,12 @@ enum pfvi_fit_status pfvi_limit_u(double* omega, double h, double u_max, double*
     return status;
 }
 
-enum pfvi_fit_status pfvi_two_point_fit(double omega, double h, double u_max, int literal, struct pfvi_two_point* fit){
+enum pfvi_fit_status pfvi_two_point_fit(double omega, double h, double u_max, int literal, struct pfvi_two_point_fit* fit){
     double u;
     const enum pfvi_fit_status status = pfvi_limit_u(&omega, h, u_max, &u);
     if (u == 0.){
         // Classical trapezoidal discrete Lagrangian: exactly velocity Verlet.
-        *fit = (struct pfvi_two_point){
+        *fit = (struct pfvi_two_point_fit){
             .omega = 0., .keep = 1., .cos_u_m_keep = 0., .h_sinc_u = h, .omega_sin_u = 0.,
             .half_kick = 0.5*h, .gamma = 1.,
         };
@@ -106,11 +116,157 @@ double pfvi_gamma(double u){
 }
 
 int pfvi_two_point_coefficients(double omega, double h, double u_max, int literal, double out[6]){
-    struct pfvi_two_point fit;
+    struct pfvi_two_point_fit fit;
     const enum pfvi_fit_status status = pfvi_two_point_fit(omega, h, u_max, literal, &fit);
     if (status != PFVI_FIT_POLE){
         out[0] = fit.omega; out[1] = fit.keep + fit.cos_u_m_keep; out[2] = fit.h_sinc_u;
         out[3] = fit.omega_sin_u; out[4] = fit.half_kick; out[5] = pfvi_gamma(fit.omega*h);
     }
     return (int)status;
+}
+
+// LU factorisation with partial pivoting of the m x m matrix in fit->lu; its
+// determinant goes to *det (0 if a pivot vanishes).
+static void stage_matrix_factor(int m, struct pfvi_stage_fit* fit, double* det){
+    double d = 1.;
+    for (int k=0; k<m; k++){
+        int p = k;
+        for (int i=k+1; i<m; i++){
+            if (fabs(fit->lu[i][k]) > fabs(fit->lu[p][k])) p = i;
+        }
+        fit->pivot[k] = p;
+        if (p != k){
+            for (int j=0; j<m; j++){
+                const double tmp = fit->lu[k][j]; fit->lu[k][j] = fit->lu[p][j]; fit->lu[p][j] = tmp;
+            }
+            d = -d;
+        }
+        const double pivot = fit->lu[k][k];
+        d *= pivot;
+        if (pivot == 0.){
+            *det = 0.;
+            return;
+        }
+        for (int i=k+1; i<m; i++){
+            const double f = fit->lu[i][k]/pivot;
+            fit->lu[i][k] = f;
+            for (int j=k+1; j<m; j++){
+                fit->lu[i][j] -= f*fit->lu[k][j];
+            }
+        }
+    }
+    *det = d;
+}
+
+// Coefficients, momentum normalisation and factorised matrix at u (u = 0: classical).
+void pfvi_stage_fit_at(const struct pfvi_lobatto* rule, double u, int phase, struct pfvi_stage_fit* fit, double* det){
+    const int s = rule->s;
+    if (u == 0.){
+        for (int k=0; k<s; k++){
+            fit->b[k] = 1. - rule->c[k]; fit->bbar[k] = rule->c[k];
+            fit->B[k] = -1.; fit->Bbar[k] = 1.;
+            fit->beta_m[k] = 0.; fit->beta_d[k] = 0.;
+        }
+        fit->G = 1.;
+    }else{
+        const double sin_u = sin(u);
+        const double u_over_sin_u = u/sin_u;
+        const double cos_half = cos(0.5*u);
+        double gamma_sum = 0.;
+        for (int k=0; k<s; k++){
+            const double c = rule->c[k];
+            const double sc = sin(c*u), cc = cos(c*u);
+            const double sm = sin((1. - c)*u), cm = cos((1. - c)*u);
+            fit->b[k] = sm/sin_u;
+            fit->bbar[k] = sc/sin_u;
+            fit->B[k] = -u_over_sin_u*cm;
+            fit->Bbar[k] = u_over_sin_u*cc;
+            fit->beta_m[k] = 2.*sin(0.5*c*u)*sin(0.5*(1. - c)*u)/cos_half;
+            fit->beta_d[k] = -u*sin((c - 0.5)*u)/cos_half;
+            gamma_sum += rule->w[k]*cos((2.*c - 1.)*u);
+        }
+        // gamma_s(u): the rule applied to cos(2 omega (t - h/2)) over its
+        // exact integral, the factor by which the printed Ld scales the
+        // oscillator's exact discrete Lagrangian.
+        fit->G = phase ? gamma_sum*u_over_sin_u : 1.;
+    }
+    // The equations -D1 Ld = G p_k (row 0) and dLd/d(delta q^j) = 0 (rows j),
+    // linear in the unknowns (Delta = q_k+1 - q_k, delta q^j) for given stage
+    // accelerations.
+    const int m = s - 1;
+    double row_B[PFVI_STAGES_MAX];  // multipliers of h qdot^k in each equation: w_k B^k, w_k a^k_j
+    memset(fit->lu, 0, sizeof(fit->lu));
+    for (int e=0; e<m; e++){
+        for (int k=0; k<s; k++){
+            row_B[k] = rule->w[k]*(e == 0 ? fit->B[k] : rule->a[k][e]);
+        }
+        double q0 = 0.;
+        for (int k=0; k<s; k++){
+            fit->lu[e][0] += row_B[k]*fit->Bbar[k];
+            for (int l=1; l<m; l++){
+                fit->lu[e][l] += row_B[k]*rule->a[k][l];
+            }
+            q0 += row_B[k]*fit->beta_d[k];
+        }
+        fit->q0_row[e] = q0;
+    }
+    stage_matrix_factor(m, fit, det);
+}
+
+int pfvi_stage_rule(int s, struct pfvi_lobatto* rule){
+    if (!pfvi_lobatto_compute(s, rule)){
+        return 0;
+    }
+    struct pfvi_stage_fit classical;
+    pfvi_stage_fit_at(rule, 0., 0, &classical, &rule->det_classical);
+    return 1;
+}
+
+enum pfvi_fit_status pfvi_stage_fit(const struct pfvi_lobatto* rule, double omega, double h,
+        double u_max, int fitting, struct pfvi_stage_fit* fit){
+    double u;
+    const enum pfvi_fit_status status = pfvi_limit_u(&omega, h, u_max, &u);
+    double det;
+    pfvi_stage_fit_at(rule, u, fitting == PFVI_FITTING_PHASE, fit, &det);
+    fit->omega = (u == 0.) ? 0. : omega;
+    // Where the matrix is (nearly) singular q_k+1 is not determined by
+    // (q_k, p_k); where G vanishes "phase" divides momenta by zero.
+    if (!(fabs(det) >= PFVI_POLE_GUARD*fabs(rule->det_classical)) || !(fabs(fit->G) >= PFVI_POLE_GUARD)){
+        return PFVI_FIT_POLE;
+    }
+    return status;
+}
+
+int pfvi_stage_coefficients(int s, double u, double* out){
+    struct pfvi_lobatto rule;
+    if (!pfvi_stage_rule(s, &rule)){
+        return 0;
+    }
+    struct pfvi_stage_fit fit;
+    double det;
+    pfvi_stage_fit_at(&rule, u, 1, &fit, &det);
+    const double* rows[6] = {fit.b, fit.bbar, fit.B, fit.Bbar, fit.beta_m, fit.beta_d};
+    out[0] = fit.G;
+    out[1] = det/rule.det_classical;
+    for (int r=0; r<6; r++){
+        for (int k=0; k<s; k++){
+            out[2 + r*s + k] = rows[r][k];
+        }
+    }
+    return 1;
+}
+
+int pfvi_lobatto_table(int s, double* c, double* w, double* a){
+    struct pfvi_lobatto rule;
+    if (!pfvi_lobatto_compute(s, &rule)){
+        return 0;
+    }
+    for (int k=0; k<s; k++){
+        c[k] = rule.c[k];
+        w[k] = rule.w[k];
+        for (int j=0; j<s; j++){
+            a[k*s + j] = rule.a[k][j];
+        }
+    }
+    return 1;
 }

@@ -1,6 +1,6 @@
 /**
- * pfvi_stages.c: one step of the s-point discrete Lagrangian with interior
- * corrections (seed section 6), s = 3 .. 6.
+ * pfvi_stages.c: the s-point scheme (stages = 3 .. 6): the discrete Lagrangian
+ * with interior corrections of K&V, "Increasing the algebraic order".
  *
  * Per particle and per Cartesian component (units of unit mass), the step
  * solves, for the unknowns Delta = q_k+1 - q_k and delta q^j (interior j),
@@ -11,12 +11,12 @@
  * + delta q^k at t_k + c^k h, and then takes
  *     G h (v_k+1 - v_k) = sum_k w_k [beta_d^k qd^k + h^2 (b^k + bbar^k) a^k]
  * (p_k+1 = D2 Ld minus p_k = -D1 Ld). For given a^k the equations are linear
- * with a matrix that depends only on u (factorised in pfvi_lobatto.c), so the
+ * with a matrix that depends only on u (factorised in pfvi_fitting.c), so the
  * solve is a fixed-point iteration: solve the linear system, evaluate forces
  * at the new stage points through REBOUND, repeat. It stops when the largest
- * change of the unknowns is zero or stops decreasing (the criterion of
- * IRKGL16, Antonana, Makazaga & Murua 2017); it has converged if that change
- * is at round-off level, and the step is refused otherwise.
+ * change of the unknowns is zero or stops decreasing (pfvi_iteration_verdict);
+ * it has converged if that change is at round-off level, and is retried
+ * shorter or refused otherwise.
  *
  * The first iterate uses the stage accelerations of the previous step,
  * extrapolated by their interpolating polynomial, when the previous step ended
@@ -24,25 +24,24 @@
  */
 #include <float.h>
 #include <math.h>
-#include <string.h>
 #include "pfvi.h"
 
 // Solves the linear part for one particle: unknowns y[e][component] from the
 // stage accelerations sa[k][component].
-static void stage_solve_linear(const struct pfvi_lobatto* q, const struct pfvi_stage_fit* f,
+static void stage_solve_linear(const struct pfvi_lobatto* rule, const struct pfvi_stage_fit* f,
         const struct reb_particle* p0, double h, const double (*sa)[3], double (*y)[3]){
-    const int s = q->s, m = s - 1;
+    const int s = rule->s, m = s - 1;
     const double h2 = h*h;
     const double q0[3] = {p0->x, p0->y, p0->z};
     const double v0[3] = {p0->vx, p0->vy, p0->vz};
     for (int c=0; c<3; c++){
         double force = 0.;
         for (int k=0; k<s; k++){
-            force += q->w[k]*f->b[k]*sa[k][c];
+            force += rule->w[k]*f->b[k]*sa[k][c];
         }
         y[0][c] = -f->G*h*v0[c] - h2*force - f->q0_row[0]*q0[c];
         for (int j=1; j<m; j++){
-            y[j][c] = -h2*q->w[j]*sa[j][c] - f->q0_row[j]*q0[c];
+            y[j][c] = -h2*rule->w[j]*sa[j][c] - f->q0_row[j]*q0[c];
         }
     }
     // Forward and back substitution with the stored LU factors and pivots.
@@ -72,11 +71,11 @@ static void stage_solve_linear(const struct pfvi_lobatto* q, const struct pfvi_s
 
 // Stage point k of one particle. The last stage is q_k + (Delta + carried
 // low-order part), exactly the position the step will end on.
-static void stage_position(const struct pfvi_lobatto* q, const struct pfvi_stage_fit* f,
+static void stage_position(const struct pfvi_lobatto* rule, const struct pfvi_stage_fit* f,
         const struct reb_particle* p0, const struct pfvi_compensation* comp, const double (*y)[3],
         int k, double x[3]){
     const double q0[3] = {p0->x, p0->y, p0->z};
-    const int s = q->s;
+    const int s = rule->s;
     for (int c=0; c<3; c++){
         if (k == 0){
             x[c] = q0[c];
@@ -89,14 +88,14 @@ static void stage_position(const struct pfvi_lobatto* q, const struct pfvi_stage
 }
 
 // h qdot^k of one particle.
-static void stage_velocity_times_h(const struct pfvi_lobatto* q, const struct pfvi_stage_fit* f,
+static void stage_velocity_times_h(const struct pfvi_lobatto* rule, const struct pfvi_stage_fit* f,
         const struct reb_particle* p0, const double (*y)[3], int k, double qd[3]){
     const double q0[3] = {p0->x, p0->y, p0->z};
-    const int s = q->s;
+    const int s = rule->s;
     for (int c=0; c<3; c++){
         double sum = f->beta_d[k]*q0[c] + f->Bbar[k]*y[0][c];
         for (int l=1; l<s-1; l++){
-            sum += q->a[k][l]*y[l][c];
+            sum += rule->a[k][l]*y[l][c];
         }
         qd[c] = sum;
     }
@@ -106,22 +105,22 @@ static void stage_velocity_times_h(const struct pfvi_lobatto* q, const struct pf
 // the first node too when forces depend on velocities, since its velocity is
 // the interpolant's, not v_k). Returns 0, rolled back, on a failure.
 static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){
-    const struct pfvi_lobatto* const q = &st->lobatto;
-    const int s = q->s;
+    const struct pfvi_lobatto* const rule = &st->rule;
+    const int s = rule->s;
     const int vdep = r->force_is_velocity_dependent;
     struct reb_particle* const ps = r->particles;
     for (int k=vdep ? 0 : 1; k<s; k++){
         for (size_t i=0; i<N; i++){
             double x[3];
-            stage_position(q, &st->stage_fit[i], &st->start[i], &st->compensation[i], st->unknowns[i], k, x);
+            stage_position(rule, &st->stage_fit[i], &st->start[i], &st->compensation[i], st->unknowns[i], k, x);
             ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
             if (vdep){
                 double qd[3];
-                stage_velocity_times_h(q, &st->stage_fit[i], &st->start[i], st->unknowns[i], k, qd);
+                stage_velocity_times_h(rule, &st->stage_fit[i], &st->start[i], st->unknowns[i], k, qd);
                 ps[i].vx = qd[0]/h; ps[i].vy = qd[1]/h; ps[i].vz = qd[2]/h;
             }
         }
-        r->t = t0 + q->c[k]*h;
+        r->t = t0 + rule->c[k]*h;
         if (!pfvi_update_acceleration(r, st, N, t0)){
             return 0;
         }
@@ -138,8 +137,8 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
 // along their interpolating polynomial to this step's nodes, or the start
 // acceleration at every node.
 static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
-    const struct pfvi_lobatto* const q = &st->lobatto;
-    const int s = q->s;
+    const struct pfvi_lobatto* const rule = &st->rule;
+    const int s = rule->s;
     const int extrapolate = st->predictor_stages == s && st->predictor_N == N && st->predictor_t == t0
         && st->predictor_h != 0.;
     double x[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
@@ -148,11 +147,11 @@ static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
         // nodes at this step's, in units of the last step.
         const double rho = h/st->predictor_h;
         for (int j=0; j<s; j++){
-            const double tau = 1. + rho*q->c[j];
+            const double tau = 1. + rho*rule->c[j];
             for (int m=0; m<s; m++){
                 double l = 1.;
                 for (int n=0; n<s; n++){
-                    if (n != m) l *= (tau - q->c[n])/(q->c[m] - q->c[n]);
+                    if (n != m) l *= (tau - rule->c[n])/(rule->c[m] - rule->c[n]);
                 }
                 x[j][m] = l;
             }
@@ -175,52 +174,37 @@ static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
     }
 }
 
-enum pfvi_trial pfvi_stages_trial(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){
-    struct pfvi_lobatto* const q = &st->lobatto;
-    if (q->s != st->stages){
+static int stages_prepare(struct pfvi_state* st, double h){
+    if (st->rule.s != st->options.stages){
         // First step, or stages changed (the predictor checks its own s).
-        pfvi_lobatto_compute(st->stages, q);
+        pfvi_stage_rule(st->options.stages, &st->rule);
     }
-    const int s = q->s, m = s - 1;
-    struct reb_particle* const ps = r->particles;
-    struct reb_particle* const p0 = st->start;
     if (!(h*h >= DBL_MIN)){
         // The stage equations carry h^2 a: below |h| ~ 1.5e-154 it underflows
         // and the velocity change h a = (h^2 a)/h is lost.
-        pfvi_roll_back(r, st, N, t0);
-        pfvi_error(r, "pfvi: dt = %.3g: dt^2 underflows (|dt| below 1.5e-154), which the %d-stage equations "
-                "cannot carry; step not taken, state restored. Use stages = 2 or larger time units.", h, s);
-        return PFVI_TRIAL_ERROR;
+        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_UNDERFLOW, .h = h, .n = (size_t)st->rule.s};
+        return 0;
     }
+    return 1;
+}
 
-    // Fit every particle before anything is written. Particles sharing u
-    // (all of them for "none" or a fixed omega) share the work.
-    uint64_t n_limited = 0;
-    double omega_min = INFINITY, omega_max = 0.;
-    double omega_last = NAN;
-    enum pfvi_fit_status status_last = PFVI_FIT_OK;
-    for (size_t i=0; i<N; i++){
-        const double omega = st->omega_fit[i];
-        enum pfvi_fit_status status;
-        if (i > 0 && omega == omega_last){
-            st->stage_fit[i] = st->stage_fit[i-1];
-            status = status_last;
-        }else{
-            status = pfvi_stage_fit(q, omega, h, st->u_max, st->fitting, &st->stage_fit[i]);
-        }
-        omega_last = omega;
-        status_last = status;
-        if (status == PFVI_FIT_POLE){
-            pfvi_roll_back(r, st, N, t0);
-            pfvi_error(r, "pfvi: particle %zu: u = omega*dt = %.6g is within %g of a singularity of the "
-                    "%d-stage fitted coefficients; step not taken. Lower u_max or dt.",
-                    i, omega*h, PFVI_POLE_GUARD, s);
-            return PFVI_TRIAL_ERROR;
-        }
-        n_limited += (status == PFVI_FIT_LIMITED);
-        omega_min = fmin(omega_min, st->stage_fit[i].omega);
-        omega_max = fmax(omega_max, st->stage_fit[i].omega);
-    }
+static enum pfvi_fit_status stages_fit(struct pfvi_state* st, size_t i, double omega, double h){
+    return pfvi_stage_fit(&st->rule, omega, h, st->options.u_max, st->options.fitting, &st->stage_fit[i]);
+}
+
+static void stages_copy_fit(struct pfvi_state* st, size_t i, size_t from){
+    st->stage_fit[i] = st->stage_fit[from];
+}
+
+static double stages_fitted_omega(const struct pfvi_state* st, size_t i){
+    return st->stage_fit[i].omega;
+}
+
+static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){
+    const struct pfvi_lobatto* const rule = &st->rule;
+    const int s = rule->s, m = s - 1;
+    struct reb_particle* const ps = r->particles;
+    struct reb_particle* const p0 = st->start;
 
     stage_predict(st, N, t0, h);
 
@@ -228,10 +212,10 @@ enum pfvi_trial pfvi_stages_trial(struct reb_simulation* r, struct pfvi_state* s
     // in stage_a were evaluated (after the first round).
     double previous = INFINITY, change = INFINITY;
     int rounds = 0, converged = 0;
-    for (int iteration=0; iteration<=PFVI_STAGE_MAX_ITERATIONS; iteration++){
+    for (int iteration=0; iteration<=PFVI_ITERATION_MAX; iteration++){
         change = 0.;
         for (size_t i=0; i<N; i++){
-            stage_solve_linear(q, &st->stage_fit[i], &p0[i], h, (const double (*)[3])st->stage_a[i], st->unknowns_next[i]);
+            stage_solve_linear(rule, &st->stage_fit[i], &p0[i], h, (const double (*)[3])st->stage_a[i], st->unknowns_next[i]);
             if (iteration == 0){
                 continue;
             }
@@ -252,17 +236,12 @@ enum pfvi_trial pfvi_stages_trial(struct reb_simulation* r, struct pfvi_state* s
             change = (relative > change || relative != relative) ? relative : change;
         }
         if (iteration > 0){
-            if (!isfinite(change)){
+            const enum pfvi_iteration verdict = pfvi_iteration_verdict(change, previous,
+                    iteration == PFVI_ITERATION_MAX);
+            if (verdict != PFVI_ITERATE){
+                converged = (verdict == PFVI_CONVERGED);
                 break;
             }
-            if (change == 0. || change >= previous){
-                converged = (change <= PFVI_STAGE_TOLERANCE);
-                break;
-            }
-        }
-        if (iteration == PFVI_STAGE_MAX_ITERATIONS){
-            converged = (change <= PFVI_STAGE_TOLERANCE);
-            break;
         }
         double (*swap)[PFVI_STAGES_MAX-1][3] = st->unknowns;
         st->unknowns = st->unknowns_next;
@@ -273,8 +252,8 @@ enum pfvi_trial pfvi_stages_trial(struct reb_simulation* r, struct pfvi_state* s
         rounds++;
         previous = (iteration == 0) ? INFINITY : change;
     }
-    st->trial_rounds = (uint64_t)rounds;
-    st->trial_change = change;
+    st->trial.rounds = (uint64_t)rounds;
+    st->trial.change = change;
     if (!converged){
         pfvi_roll_back(r, st, N, t0);
         return PFVI_TRIAL_NOT_CONVERGED;
@@ -289,15 +268,15 @@ enum pfvi_trial pfvi_stages_trial(struct reb_simulation* r, struct pfvi_state* s
         double dv[3] = {0., 0., 0.};
         for (int k=0; k<s; k++){
             double qd[3];
-            stage_velocity_times_h(q, f, &p0[i], y, k, qd);
-            const double wk = q->w[k], wf = h2*(1. + f->beta_m[k]);
+            stage_velocity_times_h(rule, f, &p0[i], y, k, qd);
+            const double wk = rule->w[k], wf = h2*(1. + f->beta_m[k]);
             for (int c=0; c<3; c++){
                 dv[c] += wk*(f->beta_d[k]*qd[c] + wf*st->stage_a[i][k][c]);
             }
         }
         const double gh = f->G*h;
         double x[3];
-        stage_position(q, f, &p0[i], comp, y, s - 1, x);
+        stage_position(rule, f, &p0[i], comp, y, s - 1, x);
         ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
         const double inc_v[3] = {dv[0]/gh + comp->v[0], dv[1]/gh + comp->v[1], dv[2]/gh + comp->v[2]};
         ps[i].vx = p0[i].vx + inc_v[0];
@@ -310,22 +289,12 @@ enum pfvi_trial pfvi_stages_trial(struct reb_simulation* r, struct pfvi_state* s
         st->dv[i] = (struct reb_vec3d){inc_v[0], inc_v[1], inc_v[2]};
     }
     r->t = t0 + h;
-    for (size_t i=0; i<N; i++){
-        if (!pfvi_particle_finite(&ps[i])){
-            pfvi_roll_back(r, st, N, t0);
-            pfvi_error(r, "pfvi: particle %zu became non-finite in the step from t = %.17g; step not taken, state restored.", i, t0);
-            return PFVI_TRIAL_ERROR;
-        }
-    }
-    st->trial_n_limited = n_limited;
-    st->trial_omega_min = omega_min;
-    st->trial_omega_max = omega_max;
     return PFVI_TRIAL_OK;
 }
 
 // The step is taken: keep what the sums of x and v lost, and this step's
 // stage accelerations for the next step's predictor.
-void pfvi_stages_commit(struct reb_simulation* r, struct pfvi_state* st, size_t N, double h){
+static void stages_commit(struct reb_simulation* r, struct pfvi_state* st, size_t N, double h){
     const struct reb_particle* const ps = r->particles;
     const struct reb_particle* const p0 = st->start;
     for (size_t i=0; i<N; i++){
@@ -341,11 +310,17 @@ void pfvi_stages_commit(struct reb_simulation* r, struct pfvi_state* st, size_t 
     double (*swap)[PFVI_STAGES_MAX][3] = st->predictor_a;
     st->predictor_a = st->stage_a;
     st->stage_a = swap;
-    st->predictor_stages = st->lobatto.s;
+    st->predictor_stages = st->rule.s;
     st->predictor_N = N;
     st->predictor_h = h;
     st->predictor_t = r->t;
-    const uint64_t rounds = st->trial_rounds;
-    st->n_iterations += rounds;
-    st->iterations_max = (rounds > st->iterations_max) ? rounds : st->iterations_max;
 }
+
+const struct pfvi_scheme pfvi_stages_scheme = {
+    .prepare = stages_prepare,
+    .fit = stages_fit,
+    .copy_fit = stages_copy_fit,
+    .fitted_omega = stages_fitted_omega,
+    .advance = stages_advance,
+    .commit = stages_commit,
+};

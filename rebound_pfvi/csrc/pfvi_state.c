@@ -1,0 +1,290 @@
+/**
+ * pfvi_state.c: what every layer of a step shares: the scratch (grown only
+ * with N), the force evaluation through REBOUND and the reuse of the last
+ * step's end acceleration, the rollback that leaves a refused step without a
+ * trace, the tracking of particles a callback adds or removes mid-step, the
+ * faults the glue reports, and the one stopping rule of the fixed-point
+ * iterations.
+ */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "pfvi.h"
+
+void pfvi_state_free(struct pfvi_state* st){
+    free(st->start);
+    free(st->end);
+    free(st->fit);
+    free(st->v_rotated);
+    free(st->dx);
+    free(st->dv);
+    free(st->compensation);
+    free(st->stage_fit);
+    free(st->stage_a);
+    free(st->predictor_a);
+    free(st->omega_fit);
+    free(st->omega_end);
+    free(st->osculating_start);
+    free(st->unknowns);
+    free(st->unknowns_next);
+    free(st->origin);
+    free(st);
+}
+
+// realloc that keeps the old buffer (and clears *ok) if it fails, so that
+// free() still finds every buffer.
+static void* pfvi_grow(void* buffer, size_t size, int* ok){
+    void* grown = realloc(buffer, size);
+    if (!grown){
+        *ok = 0;
+        return buffer;
+    }
+    return grown;
+}
+
+int pfvi_scratch(struct pfvi_state* st, size_t N){
+    if (st->N_compensation != N){
+        // New or removed particles: the low-order parts no longer belong to
+        // anyone. (Particles edited in place: pfvi_forget_edited.)
+        struct pfvi_compensation* comp = realloc(st->compensation, N*sizeof(struct pfvi_compensation));
+        if (!comp){
+            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_MEMORY, .n = N};
+            return 0;
+        }
+        memset(comp, 0, N*sizeof(struct pfvi_compensation));
+        st->compensation = comp;
+        st->N_compensation = N;
+    }
+    if (N <= st->N_allocated){
+        return 1;
+    }
+    st->cache_N = 0;
+    int ok = 1;
+    st->start = pfvi_grow(st->start, N*sizeof(*st->start), &ok);
+    st->end = pfvi_grow(st->end, N*sizeof(*st->end), &ok);
+    st->fit = pfvi_grow(st->fit, N*sizeof(*st->fit), &ok);
+    st->v_rotated = pfvi_grow(st->v_rotated, N*sizeof(*st->v_rotated), &ok);
+    st->dx = pfvi_grow(st->dx, N*sizeof(*st->dx), &ok);
+    st->dv = pfvi_grow(st->dv, N*sizeof(*st->dv), &ok);
+    st->stage_fit = pfvi_grow(st->stage_fit, N*sizeof(*st->stage_fit), &ok);
+    st->stage_a = pfvi_grow(st->stage_a, N*sizeof(*st->stage_a), &ok);
+    st->predictor_a = pfvi_grow(st->predictor_a, N*sizeof(*st->predictor_a), &ok);
+    st->omega_fit = pfvi_grow(st->omega_fit, N*sizeof(*st->omega_fit), &ok);
+    st->omega_end = pfvi_grow(st->omega_end, N*sizeof(*st->omega_end), &ok);
+    st->osculating_start = pfvi_grow(st->osculating_start, N*sizeof(*st->osculating_start), &ok);
+    st->unknowns = pfvi_grow(st->unknowns, N*sizeof(*st->unknowns), &ok);
+    st->unknowns_next = pfvi_grow(st->unknowns_next, N*sizeof(*st->unknowns_next), &ok);
+    if (st->predictor_N > N){
+        // Only after a Simulationarchive load with fewer particles: the buffer
+        // now holds N; an archive must never write more than it holds.
+        st->predictor_N = 0;
+        st->predictor_stages = 0;
+    }
+    if (!ok){
+        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_MEMORY, .n = N};
+        return 0;
+    }
+    st->N_allocated = N;
+    return 1;
+}
+
+int pfvi_particle_finite(const struct reb_particle* p){
+    return isfinite(p->x) && isfinite(p->y) && isfinite(p->z)
+        && isfinite(p->vx) && isfinite(p->vy) && isfinite(p->vz) && isfinite(p->m);
+}
+
+struct pfvi_force_model pfvi_force_model_of(const struct reb_simulation* r){
+    struct pfvi_force_model m;
+    memset(&m, 0, sizeof(m));
+    m.G = r->G;
+    m.softening = r->softening;
+    m.opening_angle2 = r->opening_angle2;
+    m.root_size = r->root_size;
+    m.OMEGA = r->OMEGA;
+    m.OMEGAZ = r->OMEGAZ;
+    m.N_root[0] = r->N_root_x; m.N_root[1] = r->N_root_y; m.N_root[2] = r->N_root_z;
+    m.N_active = r->N_active;
+    m.gravity = (int)r->gravity;
+    m.testparticle_type = r->testparticle_type;
+    m.force_is_velocity_dependent = r->force_is_velocity_dependent;
+    m.boundary = (int)r->boundary;
+    m.N_ghost[0] = r->N_ghost_x; m.N_ghost[1] = r->N_ghost_y; m.N_ghost[2] = r->N_ghost_z;
+    m.additional_forces = r->additional_forces;
+    m.gravity_custom = r->gravity_custom;
+    m.extras = r->extras;
+    return m;
+}
+
+int pfvi_end_is_start(const struct reb_simulation* r, const struct pfvi_state* st){
+    const size_t N = r->N;
+    if (st->cache_N != N || st->cache_t != r->t){
+        return 0;
+    }
+    const struct pfvi_force_model model = pfvi_force_model_of(r);
+    if (memcmp(&model, &st->cache_model, sizeof(model))){
+        return 0;
+    }
+    const struct reb_particle* const ps = r->particles;
+    const struct pfvi_end_state* const e = st->end;
+    for (size_t i=0; i<N; i++){
+        if (memcmp(&ps[i].x, e[i].xv, sizeof(e[i].xv)) || memcmp(&ps[i].m, &e[i].m, sizeof(double))){
+            return 0;
+        }
+    }
+    return 1;
+}
+
+void pfvi_keep_end(const struct reb_simulation* r, struct pfvi_state* st, size_t N){
+    const struct reb_particle* const ps = r->particles;
+    struct pfvi_end_state* const e = st->end;
+    for (size_t i=0; i<N; i++){
+        memcpy(e[i].xv, &ps[i].x, sizeof(e[i].xv));
+        e[i].m = ps[i].m;
+        e[i].a[0] = ps[i].ax; e[i].a[1] = ps[i].ay; e[i].a[2] = ps[i].az;
+    }
+    st->cache_N = N;
+    st->cache_t = r->t;
+    st->cache_model = pfvi_force_model_of(r);
+}
+
+// A particle the user edited (or replaced) since the last step keeps nothing
+// from its predecessor: its compensation is cleared and the stage predictor
+// dropped, so that continuing equals starting afresh from the edited state.
+void pfvi_forget_edited(const struct reb_simulation* r, struct pfvi_state* st){
+    const size_t N = r->N;
+    if (st->cache_N != N || st->N_compensation != N){
+        return;  // N changed (compensation already cleared) or no step to compare with
+    }
+    const struct reb_particle* const ps = r->particles;
+    const struct pfvi_end_state* const e = st->end;
+    int edited = 0;
+    for (size_t i=0; i<N; i++){
+        if (memcmp(&ps[i].x, e[i].xv, sizeof(e[i].xv)) || memcmp(&ps[i].m, &e[i].m, sizeof(double))){
+            st->compensation[i] = (struct pfvi_compensation){{0., 0., 0.}, {0., 0., 0.}};
+            edited = 1;
+        }
+    }
+    if (edited){
+        st->predictor_stages = 0;
+    }
+}
+
+void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
+    memcpy(r->particles, st->start, N*sizeof(struct reb_particle));
+    r->t = t0;
+    st->cache_N = 0;
+}
+
+// Room for n entries of origin. Only a callback that adds or removes
+// particles during a step gets here, never the hot path.
+static int pfvi_origin_reserve(struct pfvi_state* st, size_t n){
+    if (n <= st->origin_allocated){
+        return 1;
+    }
+    size_t* const grown = realloc(st->origin, n*sizeof(*grown));
+    if (!grown){
+        st->in_step = PFVI_STEP_UNTRACKED;
+        return 0;
+    }
+    st->origin = grown;
+    st->origin_allocated = n;
+    return 1;
+}
+
+// Whether a change of N is to be tracked now (a step is running): at the
+// first change, origin becomes the identity over the step's particles.
+static int pfvi_origin_tracking(struct pfvi_state* st){
+    if (st->in_step == PFVI_STEP_IDLE || st->in_step == PFVI_STEP_UNTRACKED){
+        return 0;
+    }
+    if (st->in_step == PFVI_STEP_RUNNING){
+        if (!pfvi_origin_reserve(st, st->step_N + 1)){
+            return 0;
+        }
+        for (size_t i=0; i<st->step_N; i++){
+            st->origin[i] = i;
+        }
+        st->origin_N = st->step_N;
+        st->in_step = PFVI_STEP_TRACKING;
+    }
+    return 1;
+}
+
+void pfvi_track_added(struct pfvi_state* st){
+    if (pfvi_origin_tracking(st) && pfvi_origin_reserve(st, st->origin_N + 1)){
+        st->origin[st->origin_N++] = SIZE_MAX;  // REBOUND appends
+    }
+}
+
+void pfvi_track_removed(struct pfvi_state* st, size_t index){
+    if (pfvi_origin_tracking(st) && index < st->origin_N){  // REBOUND refuses an index out of range
+        memmove(&st->origin[index], &st->origin[index + 1], (st->origin_N - index - 1)*sizeof(*st->origin));
+        st->origin_N--;
+    }
+}
+
+// A callback added or removed particles during a force evaluation: t and
+// every particle still there go back to the step's start; the removed ones
+// are gone and the added ones stay as added (the callback's doing).
+static void pfvi_roll_back_changed_N(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
+    const size_t now = r->N;
+    st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_N_CHANGED, .n = N, .n_after = now, .t = r->t};
+    r->t = t0;
+    st->cache_N = 0;
+    if (st->in_step != PFVI_STEP_TRACKING || st->origin_N != now){
+        return;  // flag 0: the particles could not be restored (out of memory)
+    }
+    for (size_t k=0; k<now; k++){
+        if (st->origin[k] == SIZE_MAX){
+            st->fault.added++;
+        }else{
+            r->particles[k] = st->start[st->origin[k]];
+            st->fault.kept++;
+        }
+    }
+    st->fault.flag = 1;
+}
+
+int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
+    reb_simulation_update_acceleration(r);
+    st->statistics.n_force_evaluations++;
+    if (r->N != N){
+        pfvi_roll_back_changed_N(r, st, N, t0);
+        return 0;
+    }
+    const struct reb_particle* const ps = r->particles;
+    for (size_t i=0; i<N; i++){
+        if (!(isfinite(ps[i].ax) && isfinite(ps[i].ay) && isfinite(ps[i].az))){
+            // A position or velocity that overflowed in the step is the cause
+            // to name, not the force it produced.
+            size_t j = 0;
+            while (j < N && pfvi_particle_finite(&ps[j])){
+                j++;
+            }
+            if (j < N){
+                const int position = !(isfinite(ps[j].x) && isfinite(ps[j].y) && isfinite(ps[j].z));
+                st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_OVERFLOW, .particle = j, .t0 = t0, .flag = position};
+            }else{
+                st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_FORCE, .particle = i, .t = r->t};
+            }
+            pfvi_roll_back(r, st, N, t0);
+            return 0;
+        }
+    }
+    return 1;
+}
+
+// The stopping rule of IRKGL16 (Antonana, Makazaga & Murua 2017): iterate
+// while the largest relative change decreases; once it is zero or stops
+// decreasing it is round-off, and the iteration has converged if that is at
+// most PFVI_ITERATION_TOLERANCE. A change that is not finite has failed.
+enum pfvi_iteration pfvi_iteration_verdict(double change, double previous, int last_round){
+    if (!isfinite(change)){
+        return PFVI_FAILED;
+    }
+    if (change == 0. || change >= previous || last_round){
+        return (change <= PFVI_ITERATION_TOLERANCE) ? PFVI_CONVERGED : PFVI_FAILED;
+    }
+    return PFVI_ITERATE;
+}

@@ -1,0 +1,87 @@
+/**
+ * pfvi_step.c: the one stepping skeleton every scheme runs on (a scheme is
+ * a table, struct pfvi_scheme): fit every particle before anything is
+ * written, advance, check that every particle is finite, keep what the trial
+ * found; commit it if the step is taken. A trial commits nothing, so the
+ * step control can try as many as it needs; a refused trial is rolled back.
+ */
+#include <math.h>
+#include "pfvi.h"
+
+double pfvi_step_frequency(const struct pfvi_options* o, const double v[3], const double a[3]){
+    if (o->fitting == PFVI_FITTING_NONE){
+        return 0.;
+    }
+    if (o->frequency == PFVI_FREQUENCY_FIXED){
+        return o->omega;
+    }
+    return pfvi_curvature_frequency(v, a);
+}
+
+static const struct pfvi_scheme* pfvi_scheme_of(const struct pfvi_state* st){
+    return (st->options.stages == 2) ? &pfvi_two_point_scheme : &pfvi_stages_scheme;
+}
+
+enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){
+    const struct pfvi_scheme* const scheme = pfvi_scheme_of(st);
+    st->statistics.n_attempts++;
+    if (!scheme->prepare(st, h)){
+        pfvi_roll_back(r, st, N, t0);
+        return PFVI_TRIAL_ERROR;
+    }
+    // Fit every particle before anything is written. Particles sharing
+    // omega (all of them for "none" or a fixed omega) share the work.
+    uint64_t n_limited = 0;
+    double omega_min = INFINITY, omega_max = 0.;
+    double omega_last = NAN;
+    enum pfvi_fit_status status_last = PFVI_FIT_OK;
+    for (size_t i=0; i<N; i++){
+        const double omega = st->omega_fit[i];
+        enum pfvi_fit_status status;
+        if (i > 0 && omega == omega_last){
+            scheme->copy_fit(st, i, i - 1);
+            status = status_last;
+        }else{
+            status = scheme->fit(st, i, omega, h);
+        }
+        omega_last = omega;
+        status_last = status;
+        if (status == PFVI_FIT_POLE){
+            pfvi_roll_back(r, st, N, t0);
+            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_POLE, .particle = i, .value = omega*h,
+                .n = (size_t)st->options.stages};
+            return PFVI_TRIAL_ERROR;
+        }
+        n_limited += (status == PFVI_FIT_LIMITED);
+        omega_min = fmin(omega_min, scheme->fitted_omega(st, i));
+        omega_max = fmax(omega_max, scheme->fitted_omega(st, i));
+    }
+
+    const enum pfvi_trial trial = scheme->advance(r, st, N, t0, h);
+    if (trial != PFVI_TRIAL_OK){
+        return trial;
+    }
+    const struct reb_particle* const ps = r->particles;
+    for (size_t i=0; i<N; i++){
+        if (!pfvi_particle_finite(&ps[i])){
+            pfvi_roll_back(r, st, N, t0);
+            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_NOT_FINITE, .particle = i, .t0 = t0};
+            return PFVI_TRIAL_ERROR;
+        }
+    }
+    st->trial.n_limited = n_limited;
+    st->trial.omega_min = omega_min;
+    st->trial.omega_max = omega_max;
+    return PFVI_TRIAL_OK;
+}
+
+void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double h){
+    pfvi_scheme_of(st)->commit(r, st, N, h);
+    struct pfvi_statistics* const stats = &st->statistics;
+    const uint64_t rounds = st->trial.rounds;
+    stats->n_iterations += rounds;
+    stats->iterations_max = (rounds > stats->iterations_max) ? rounds : stats->iterations_max;
+    stats->n_u_limited += st->trial.n_limited;
+    stats->omega_min = st->trial.omega_min;
+    stats->omega_max = st->trial.omega_max;
+}
