@@ -89,3 +89,19 @@ STEP_MODES = {
     "reversible-s2": (2, 1e-7, "reversible"),
     "reversible-s4": (4, 1e-7, "reversible"),
 }
+
+
+def three_bodies(stages, epsilon, step_control="reversible", e=0.3):
+    """A star, a planet of 1e-3 (a = 1, eccentricity e) and one of 1e-4 (a = 1.7)
+    under pfvi, dt = 0.01: the system of the force-model and refusal tests."""
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=e)
+    sim.add(m=1e-4, a=1.7, e=0.1, primary=sim.particles[0])
+    sim.testparticle_hidewarnings = 1
+    sim.integrator = "pfvi"
+    sim.integrator.stages = stages
+    sim.integrator.epsilon = epsilon
+    sim.integrator.step_control = step_control
+    sim.dt = 0.01
+    return sim

@@ -86,7 +86,7 @@ def test_a_step_no_trial_can_satisfy_is_refused_with_state_untouched(step_contro
     # reach (60 shrinks of at most 10x), so every trial is refused. (Random
     # force noise does not do it: the seed's estimate moves R and the centre
     # together along the normal and cancels such noise to first order, and a
-    # kick flipping the curvature's side makes it abstain, pfvi_control.c.)
+    # kick flipping the curvature's side makes it abstain, pfvi_osculating.c.)
     sim = eccentric(step_control=step_control, epsilon=1e-9, stages=4)
     sim.integrate(0.3)
     calls = {"n": 0}

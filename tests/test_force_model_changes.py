@@ -13,24 +13,14 @@ import math
 import pytest
 import rebound
 
-from conftest import STEP_MODES, particle_bytes, snapshot
+from conftest import STEP_MODES, particle_bytes, snapshot, three_bodies
 
 #: Every step mode of the fault tests, and the other stage counts with fixed steps.
 MODES = dict(STEP_MODES, **{f"fixed-s{s}": (s, 0.0, "reversible") for s in (3, 5, 6)})
 
 
 def pair(mode, e=0.3, setup=None):
-    stages, epsilon, step_control = MODES[mode]
-    sim = rebound.Simulation()
-    sim.add(m=1.0)
-    sim.add(m=1e-3, a=1.0, e=e)
-    sim.add(m=1e-4, a=1.7, e=0.1, primary=sim.particles[0])
-    sim.integrator = "pfvi"
-    sim.integrator.stages = stages
-    sim.integrator.epsilon = epsilon
-    sim.integrator.step_control = step_control
-    sim.dt = 0.01
-    sim.testparticle_hidewarnings = 1
+    sim = three_bodies(*MODES[mode], e=e)
     if setup:
         setup(sim)
     return sim

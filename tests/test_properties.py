@@ -14,7 +14,7 @@ import rebound
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from conftest import snapshot
+from conftest import snapshot, three_bodies
 
 # No example database in the working directory; the same examples on every run.
 SETTINGS = dict(database=None, derandomize=True, deadline=None,
@@ -160,20 +160,7 @@ def double_bytes(sim):
        value=st.floats(0.01, 0.5), e=st.floats(0.0, 0.8))
 def test_force_model_changes_between_steps_equal_a_fresh_integrate(stages, epsilon, step_control, first, second,
                                                                   kinds, value, e):
-    def build_pair():
-        sim = rebound.Simulation()
-        sim.add(m=1.0)
-        sim.add(m=1e-3, a=1.0, e=e)
-        sim.add(m=1e-4, a=1.8, e=0.1, primary=sim.particles[0])
-        sim.testparticle_hidewarnings = 1
-        sim.integrator = "pfvi"
-        sim.integrator.stages = stages
-        sim.integrator.epsilon = epsilon
-        sim.integrator.step_control = step_control
-        sim.dt = 0.01
-        return sim
-
-    continued, fresh = build_pair(), build_pair()
+    continued, fresh = (three_bodies(stages, epsilon, step_control, e=e) for _ in range(2))
     changes = [force_model_change(kind, value) for kind in kinds]
     try:
         for sim in (continued, fresh):
@@ -194,15 +181,7 @@ def test_force_model_changes_between_steps_equal_a_fresh_integrate(stages, epsil
        fault=st.sampled_from(["nan", "inf", "remove", "add"]), index=st.integers(0, 2))
 def test_a_refused_step_leaves_every_particle_still_there_unchanged(stages, epsilon, step_control, fault_at, fault,
                                                                    index):
-    sim = rebound.Simulation()
-    sim.add(m=1.0)
-    sim.add(m=1e-3, a=1.0, e=0.4)
-    sim.add(m=1e-4, a=1.8, e=0.1, primary=sim.particles[0])
-    sim.integrator = "pfvi"
-    sim.integrator.stages = stages
-    sim.integrator.epsilon = epsilon
-    sim.integrator.step_control = step_control
-    sim.dt = 0.01
+    sim = three_bodies(stages, epsilon, step_control, e=0.4)
     sim.steps(3)
     calls = {"n": 0}
 
