@@ -360,6 +360,16 @@ struct pfvi_state {
     // The last step's stage accelerations seed the next solve if it starts
     // where that step ended (same s, N and t). Saved in archives with
     // predictor_a, so that a continued run is bit-identical.
+    // The last trial of the step being taken, if its solve converged: a
+    // retry from the same t0 starts from its stages when the step control
+    // allows it (retry_allowed: the reversible controller, whose trials
+    // solve the step equation; the accept/reject controller keeps a rejected
+    // trial without trace). Not saved: it never outlives the step.
+    int retry_allowed;
+    int retry_valid;
+    int retry_stages;
+    double retry_t0;
+    double retry_h;
     int predictor_stages;          // s of that step (0: none)
     size_t predictor_N;
     double predictor_h;

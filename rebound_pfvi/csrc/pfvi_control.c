@@ -261,7 +261,10 @@ double pfvi_controlled_step(struct reb_simulation* r, struct pfvi_state* st, siz
         omega_start_max = fmax(omega_start_max, control_omega(st, &st->osculating_start[i]));
     }
     if (st->options.step_control == PFVI_STEP_CONTROL_REVERSIBLE){
-        return control_reversible(r, st, N, t0, omega_start_max);
+        st->retry_allowed = 1;
+        const double h = control_reversible(r, st, N, t0, omega_start_max);
+        st->retry_allowed = 0;
+        return h;
     }
     return control_seed(r, st, N, t0, omega_start_max);
 }

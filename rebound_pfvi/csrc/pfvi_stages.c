@@ -133,21 +133,24 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
     return 1;
 }
 
-// First iterate of the stage accelerations: the previous step's, extrapolated
-// along their interpolating polynomial to this step's nodes, or the start
-// acceleration at every node.
+// First iterate of the stage accelerations, along an interpolating
+// polynomial of converged ones: those of the last trial of this same step
+// (a trial the step control rejected, or retries at another h), or else the
+// last step's, extrapolated; without either, the start acceleration at every node.
 static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
     const struct pfvi_lobatto* const rule = &st->rule;
     const int s = rule->s;
-    const int extrapolate = st->predictor_stages == s && st->predictor_N == N && st->predictor_t == t0
+    const int retry = st->retry_valid && st->retry_t0 == t0 && st->retry_stages == s && st->retry_h != 0.;
+    const int extrapolate = !retry && st->predictor_stages == s && st->predictor_N == N && st->predictor_t == t0
         && st->predictor_h != 0.;
     double x[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
-    if (extrapolate){
-        // x[j][m] = l_m(1 + rho c^j): the Lagrange basis of the last step's
-        // nodes at this step's, in units of the last step.
-        const double rho = h/st->predictor_h;
+    if (retry || extrapolate){
+        // x[j][m] = l_m(tau_j): the Lagrange basis of the source's nodes at
+        // this step's, in units of the source's step (which starts at t0 for
+        // a retry, and ends there for the last step).
+        const double rho = h/(retry ? st->retry_h : st->predictor_h);
         for (int j=0; j<s; j++){
-            const double tau = 1. + rho*rule->c[j];
+            const double tau = (retry ? 0. : 1.) + rho*rule->c[j];
             for (int m=0; m<s; m++){
                 double l = 1.;
                 for (int n=0; n<s; n++){
@@ -158,14 +161,21 @@ static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
         }
     }
     for (size_t i=0; i<N; i++){
+        // A retry reads the values it overwrites: this particle's, copied first.
+        double source[PFVI_STAGES_MAX][3];
+        for (int m=0; m<s; m++){
+            for (int c=0; c<3; c++){
+                source[m][c] = retry ? st->stage_a[i][m][c] : (extrapolate ? st->predictor_a[i][m][c] : 0.);
+            }
+        }
         for (int k=0; k<s; k++){
             for (int c=0; c<3; c++){
-                if (k == 0 || !extrapolate){
+                if (k == 0 || !(retry || extrapolate)){
                     st->stage_a[i][k][c] = st->end[i].a[c];  // the start acceleration
                 }else{
                     double sum = 0.;
                     for (int m=0; m<s; m++){
-                        sum += x[k][m]*st->predictor_a[i][m][c];
+                        sum += x[k][m]*source[m][c];
                     }
                     st->stage_a[i][k][c] = sum;
                 }
@@ -254,6 +264,11 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
     }
     st->trial.rounds = (uint64_t)rounds;
     st->trial.change = change;
+    // A retry of this step from t0 starts from these stages if they converged.
+    st->retry_valid = converged && st->retry_allowed;
+    st->retry_t0 = t0;
+    st->retry_h = h;
+    st->retry_stages = s;
     if (!converged){
         pfvi_roll_back(r, st, N, t0);
         return PFVI_TRIAL_NOT_CONVERGED;
@@ -314,6 +329,7 @@ static void stages_commit(struct reb_simulation* r, struct pfvi_state* st, size_
     st->predictor_N = N;
     st->predictor_h = h;
     st->predictor_t = r->t;
+    st->retry_valid = 0;  // stage_a now holds the predictor's old buffer
 }
 
 const struct pfvi_scheme pfvi_stages_scheme = {
