@@ -222,6 +222,7 @@ def run_compare(parser, args, argv):
     if results.interrupted:
         print(f"\nInterrupted: {results.finished} of {len(settings)} runs finished and kept.", file=sys.stderr)
     print(f"Wrote {', '.join(paths.values())} ({results.wall_s:.1f} s)")
+    _print_verdicts(results.verdict_counts(), results.rows, "line")
     best = report.fastest(results.rows, 1e-6)
     if best:
         winner = min(best, key=lambda n: best[n]["wall_s"])
@@ -292,10 +293,25 @@ def run_stability(args, argv):
         return 130
     command = "rebound-pfvi " + " ".join(shlex.quote(a) for a in argv)
     paths = stability.write(report, args.output, command=command)
-    bad = [r for r in report.rows if r["status"] != "finished"]
-    print(f"Wrote {', '.join(map(str, paths))} ({report.wall_s:.0f} s); {len(report.rows) - len(bad)} runs "
-          f"finished, {len(bad)} refused, stopped or failed (see what_happened)")
+    print(f"Wrote {', '.join(map(str, paths))} ({report.wall_s:.0f} s)")
+    _print_verdicts(stability.verdict_counts(report), report.rows, "integrator")
     return 0
+
+
+def _print_verdicts(counts, rows, key):
+    """The verdicts counted per integrator, then every run that did not finish, with its whole message."""
+    from .verdict import ACCURATE, INACCURATE, text_counts
+
+    print("Verdicts (accurate: finished within the tolerance; see the report):")
+    for line in text_counts(counts):
+        print("  " + line)
+    failed = [r for r in rows if r["verdict"] not in (ACCURATE, INACCURATE)]
+    if failed:
+        print(f"{len(failed)} run(s) did not finish:")
+        for r in failed:
+            where = f"{r['case']}: " if "case" in r else ""
+            knob = f" {r['knob']}={r['value']:g}" if "knob" in r else ""
+            print(f"- {where}{r[key]}{knob}: {r['verdict']}: {r['verdict_detail']}")
 
 
 def main(argv=None):

@@ -11,7 +11,9 @@ Each setting is run by :func:`run_setting`, which
 2. runs once more, untimed, stopping at ``samples`` evenly spaced times
    without changing the steps (``exact_finish_time=0``) to find the largest
    relative energy error, with a callback in ``additional_forces`` that adds
-   nothing and counts force evaluations.
+   nothing and counts force evaluations;
+3. gives the run its verdict (:mod:`rebound_pfvi.verdict`: accurate,
+   inaccurate, refused, crashed) against the scene's tolerance.
 
 :func:`run` sends the settings to a local process pool (default), to a Dask
 ``distributed`` scheduler (``scheduler="tcp://..."``), or runs them in this
@@ -154,7 +156,8 @@ def run_setting(scene, setting, reference, repeats=3, samples=100):
             walls.append(time.perf_counter() - tick)
         row.update(wall_s=min(walls), walls_s=walls, steps=int(sim.steps_done), t_final=float(sim.t),
                    energy_error_final=abs(scene.energy(sim) / E0 - 1.0),
-                   position_error=scene.position_error(sim, reference))
+                   position_error=scene.position_error(sim, reference),
+                   relative_position_error=scene.relative_position_error(sim, reference))
         if setting.family == "pfvi":
             row.update(pfvi_force_evaluations=int(sim.integrator.n_force_evaluations),
                        attempts_per_step=int(sim.integrator.n_attempts) / max(1, int(sim.integrator.n_steps)),
@@ -181,7 +184,26 @@ def run_setting(scene, setting, reference, repeats=3, samples=100):
             row["status"] = "diverged (non-finite energy or position)"
     except Exception as error:  # noqa: BLE001 - a refused or failed run is a result, recorded with its message
         row["status"] = f"failed: {type(error).__name__}: {error}"
+    row["verdict"], row["verdict_detail"] = judge(scene, row)
     return row
+
+
+def judge(scene, row):
+    """(verdict, detail) of a row (:mod:`rebound_pfvi.verdict`), against the
+    scene's ``tolerance`` if it has one, else the default."""
+    from . import verdict
+
+    status = row["status"]
+    if status == "ok":
+        return verdict.judge(row["energy_error_max"], row.get("relative_position_error"),
+                             getattr(scene, "tolerance", verdict.DEFAULT))
+    if status.startswith("diverged"):
+        return verdict.INACCURATE, status
+    error = status[len("failed: "):] if status.startswith("failed: ") else status
+    kind = verdict.of_exception(error)
+    if kind == verdict.REFUSED:
+        return kind, error[len("RuntimeError: "):]
+    return kind, error
 
 
 def _task(args):
@@ -212,6 +234,12 @@ class Results:
     @property
     def finished(self):
         return len(self.rows)
+
+    def verdict_counts(self):
+        """{line: {verdict: runs}} (a line is an integrator with its options, e.g. "pfvi s=4 phase")."""
+        from .verdict import count
+
+        return count(self.rows, "line")
 
     def to_dict(self):
         from .units import REBOUND_UNITS

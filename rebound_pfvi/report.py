@@ -7,8 +7,9 @@ import platform
 
 #: Position errors (AU) at which the summary names the fastest run of each line.
 TARGETS = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)
-COLUMNS = ("line", "knob", "value", "status", "steps", "force_evaluations", "wall_s", "energy_error_max",
-           "energy_error_final", "position_error", "attempts_per_step", "iterations_mean")
+COLUMNS = ("line", "knob", "value", "verdict", "verdict_detail", "status", "steps", "force_evaluations", "wall_s", "energy_error_max",
+           "energy_error_final", "position_error", "relative_position_error", "attempts_per_step",
+           "iterations_mean")
 
 
 def _fmt(value, spec):
@@ -31,17 +32,23 @@ def length_unit(results):
 
 
 def markdown_table(rows, length="AU"):
-    lines = ["| integrator | setting | steps | force evals | wall [s] | max rel. energy err | "
+    lines = ["| integrator | setting | verdict | steps | force evals | wall [s] | max rel. energy err | "
              f"final rel. energy err | position err [{length}] | note |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if r["status"] != "ok":
-            lines.append(f"| {r['line']} | {_knob(r)} | - | - | - | - | - | - | {r['status']} |")
+            message = r.get("verdict_detail") or r["status"]
+            lines.append(f"| {r['line']} | {_knob(r)} | {r.get('verdict', '-')} | - | - | - | - | - | - | "
+                         f"{message.replace('|', '/')} |")
             continue
         note = ""
+        if r.get("verdict") == "inaccurate":
+            note = r["verdict_detail"]
         if r["family"] == "pfvi":
-            note = f"{r['attempts_per_step']:.1f} trials/step, {r['iterations_mean']:.1f} iterations"
-        lines.append(f"| {r['line']} | {_knob(r)} | {r['steps']} | {r['force_evaluations']} | "
+            note += ("; " if note else "") + (f"{r['attempts_per_step']:.1f} trials/step, "
+                                              f"{r['iterations_mean']:.1f} iterations")
+        lines.append(f"| {r['line']} | {_knob(r)} | {r.get('verdict', '-')} | {r['steps']} | "
+                     f"{r['force_evaluations']} | "
                      f"{r['wall_s']:.3g} | {r['energy_error_max']:.2e} | {r['energy_error_final']:.2e} | "
                      f"{r['position_error']:.2e} | {note} |")
     return "\n".join(lines)
@@ -70,6 +77,18 @@ def summary_table(rows, floor=0.0, length="AU"):
             cells = [f"**{c}**" if n == winner else c for n, c in zip(lines_in_order, cells)]
         lines.append(f"| {target:.0e} {length} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+def verdict_section(results):
+    """What the verdicts mean, the tolerance, and the runs counted per verdict and integrator."""
+    from . import verdict
+
+    tolerance = getattr(results.scene, "tolerance", verdict.DEFAULT)
+    return ("Each run's verdict: " + "; ".join(f"**{v}**: {verdict.MEANING[v]}" for v in verdict.VERDICTS[:-1])
+            + f". Tolerance: {tolerance.describe()} at t_end. A sweep includes loose settings on purpose, "
+            "so inaccurate runs are expected at its loose end; a refused run is pfvi declining a step it "
+            "cannot take (its message is in the table below).\n\n"
+            + verdict.markdown_counts(results.verdict_counts()))
 
 
 def plot(results, path):
@@ -151,6 +170,10 @@ Reference: {results.reference['how']}; its uncertainty: {floor:.1e} {length}. En
 error over {results.samples} evenly spaced times (an untimed rerun, which also counts force evaluations
 through a callback in additional_forces), and the final one. Position error: the largest distance of a
 particle from its reference position at t_end (Kepler: of the relative position).
+
+## Verdicts
+
+{verdict_section(results)}
 
 ## Fastest run of each integrator that reaches a position error
 

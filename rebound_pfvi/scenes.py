@@ -133,6 +133,14 @@ class Scene:
         """Largest distance of a particle from its reference position at t_end."""
         return max(math.dist(p, q) for p, q in zip(_positions(sim), reference["positions"]))
 
+    def relative_position_error(self, sim, reference):
+        """The position error a run's verdict is judged by: each body's error
+        relative to particle 0, over its reference distance from particle 0
+        (:func:`rebound_pfvi.verdict.relative_position_error`)."""
+        from .verdict import relative_position_error
+
+        return relative_position_error(_positions(sim), reference["positions"])
+
     def period_quantity(self):
         return units.to_quantity(self.period, "time")
 
@@ -192,6 +200,12 @@ class Kepler(Scene):
     def position_error(self, sim, reference):
         d = sim.particles[1] - sim.particles[0]
         return math.dist((d.x, d.y, d.z), self.exact_relative_position(sim.t, reference["elements"]))
+
+    def relative_position_error(self, sim, reference):
+        from .verdict import relative_vector_error
+
+        d = sim.particles[1] - sim.particles[0]
+        return relative_vector_error((d.x, d.y, d.z), self.exact_relative_position(sim.t, reference["elements"]))
 
     def describe(self):
         return (f"Kepler: e = {self.e:g}, a = {self.a:g} AU, central mass {self.mass:g} Msun, orbiter "
@@ -350,6 +364,14 @@ class Oscillator(Scene):
         phase = self.omega * sim.t
         exact = (self.amplitude * math.cos(phase), 0.5 * self.amplitude * math.sin(phase), 0.0)
         return math.dist((p.x, p.y, p.z), exact)
+
+    def relative_position_error(self, sim, reference):
+        from .verdict import relative_vector_error
+
+        p = sim.particles[0]
+        phase = self.omega * sim.t
+        exact = (self.amplitude * math.cos(phase), 0.5 * self.amplitude * math.sin(phase), 0.0)
+        return relative_vector_error((p.x, p.y, p.z), exact)
 
     def describe(self):
         return (f"Harmonic oscillator: omega = {self.omega:g} /yr, ellipse {self.amplitude:g} x "

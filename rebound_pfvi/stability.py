@@ -5,8 +5,9 @@ fitting, s = 2 and 4, adaptive steps unless the case prescribes fixed ones)
 beside IAS15 and WHFast. Every run is a separate process with a wall-time
 budget, so that a run which crashes, hangs or crawls becomes a row of the
 report ("crashed", "killed", "stopped by the budget") instead of taking the
-report down with it. Each row gives: the status (finished, refused with
-pfvi's error, stopped), the time reached, the relative energy error (final
+report down with it. Each row gives: the verdict (accurate, inaccurate,
+refused, crashed, over budget; :mod:`rebound_pfvi.verdict`, judged against
+the case's tolerance) with its detail, the time reached, the relative energy error (final
 and largest over 100 checkpoints), the position error against a reference at
 the time reached, steps, wall time, and what the integrator reported (u
 limited, steps rejected, asymmetric reversible steps).
@@ -23,7 +24,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 
-from . import scenes
+from . import scenes, verdict
 
 FITTINGS = ("phase", "phase-literal", "none")
 STAGES = (2, 4)
@@ -47,6 +48,7 @@ class Case:
     whfast_dt: float = None  # default time_scale / 100
     note: str = ""
     exact: object = None  # callable(t) -> relative position (x, y, z) for exact references
+    tolerance: verdict.Tolerance = verdict.DEFAULT  # what "accurate" means for this case
 
     @property
     def whfast_step(self):
@@ -86,11 +88,12 @@ def _period(a, mass):
     return 2.0 * math.pi * math.sqrt(a**3 / (_G() * mass))
 
 
-def _kepler_case(name, title, e, periods, m=1e-3, fixed_dt=None, note=""):
+def _kepler_case(name, title, e, periods, m=1e-3, fixed_dt=None, note="", tolerance=verdict.DEFAULT):
     build = _two_body(e, m=m)
     period = _period(1.0, 1.0 + m)
     return Case(name, title, build, periods * period, period, reference="kepler", note=note,
-                fixed_dt=(fixed_dt * period if fixed_dt is not None else None), exact=_kepler_exact(build))
+                fixed_dt=(fixed_dt * period if fixed_dt is not None else None), exact=_kepler_exact(build),
+                tolerance=tolerance)
 
 
 def _conic(q, e, f0, m=1e-3, mass=1.0):
@@ -258,8 +261,10 @@ def _build_cases():
         cases.append(_kepler_case(f"fixed-u-{label}", f"fixed steps of {dt:.3g} periods, u = omega dt = {u:g} at "
                                   f"pericentre ({label} u_max = 1), Kepler e = {e}, 3 periods", e, 3.0,
                                   fixed_dt=dt))
+    # 1000 steps of 1e-12 periods move the body by 1e-9 of its orbit: any
+    # error above round-off (1e-12 leaves room for 1000 steps of it) is a fault.
     tiny = _kepler_case("fixed-1e-12", "fixed steps of 1e-12 periods, 1000 steps, Kepler e = 0.9", 0.9,
-                        1000 * 1e-12, fixed_dt=1e-12)
+                        1000 * 1e-12, fixed_dt=1e-12, tolerance=verdict.Tolerance(energy=1e-12, position=1e-12))
     cases.append(tiny)
     cases.append(_kepler_case("long-e0.99", "10^5 periods at e = 0.99 (stopped by the budget if slower)",
                               0.99, 1e5))
@@ -423,6 +428,35 @@ def position_error(case, row, reference):
     return max(math.dist(p, q) for p, q in zip(positions, reference))
 
 
+def relative_position_error(case, row, reference):
+    """The position error the verdict is judged by: relative to each body's
+    reference distance from particle 0 (see :mod:`rebound_pfvi.verdict`)."""
+    positions = row["positions"]
+    if case.reference in ("kepler", "radial"):
+        d = [positions[1][k] - positions[0][k] for k in range(3)]
+        return verdict.relative_vector_error(d, reference)
+    return verdict.relative_position_error(positions, reference)
+
+
+def judge(case, row):
+    """(verdict, detail) of a row: see :mod:`rebound_pfvi.verdict`."""
+    status = row["status"]
+    if status == "finished":
+        return verdict.judge(row["energy_error_max"], row.get("relative_position_error"), case.tolerance,
+                             finite=row["finite"])
+    if status.startswith("stopped by the budget") or status.startswith("killed"):
+        detail = status
+        if row.get("fraction") is not None:
+            detail += f", at {row['fraction']:.3g} of the run"
+            if row.get("finite") and row.get("relative_position_error") is not None:
+                detail += (f" (so far: energy error {row['energy_error_max']:.2g}, position error "
+                           f"{row['relative_position_error']:.2g} of the distance)")
+        return verdict.OVER_BUDGET, detail
+    if status.startswith("refused: "):
+        return verdict.REFUSED, status[len("refused: "):]
+    return verdict.CRASHED, status
+
+
 # --- running many, each in its own process -------------------------------------
 
 def _reference_pair(case_name, t):
@@ -517,8 +551,8 @@ class Report:
 
 
 def what_happened(row):
-    """The status, and what pfvi counted on the way."""
-    parts = [row["status"]]
+    """The verdict with its detail (else the status), and what pfvi counted on the way."""
+    parts = [row["verdict_detail"] if row.get("verdict_detail") else row["status"]]
     if row.get("family") == "pfvi" and "n_steps" in row:
         if row["n_u_limited"]:
             parts.append(f"u limited in {row['n_u_limited']} particle-steps")
@@ -583,8 +617,10 @@ def run_all(case_names=None, configs=None, budget=60.0, workers=2, progress=None
             else:
                 reference = case.exact(row["t"])
             row["position_error"] = position_error(case, row, reference)
+            row["relative_position_error"] = relative_position_error(case, row, reference)
         else:
-            row["position_error"] = None
+            row["position_error"] = row["relative_position_error"] = None
+        row["verdict"], row["verdict_detail"] = judge(case, row)
         row["what_happened"] = what_happened(row)
         rows.append(row)
     return Report(rows, references, budget, time.perf_counter() - tick)
@@ -598,13 +634,24 @@ def _fmt(x, spec=".2g"):
     return format(x, spec)
 
 
+def verdict_counts(report):
+    """{integrator: {verdict: runs}} over every case of the report."""
+    return verdict.count(report.rows, "integrator")
+
+
 def markdown(report, command=None):
-    """The report as markdown: one table per case."""
+    """The report as markdown: the verdicts counted per integrator, then one table per case."""
     lines = ["# Stability report: extreme cases", ""]
     if command:
         lines += [f"Produced by `{command}` in {report.wall_s:.0f} s (2 cores here); every run in its own "
                   f"process with a budget of {report.budget:g} s of integration.", ""]
-    lines += ["Columns: status and what the integrator counted; t reached as a fraction of the case's end; "
+    lines += ["## Verdicts", "",
+              "Each run's verdict: " + "; ".join(f"**{v}**: {verdict.MEANING[v]}" for v in verdict.VERDICTS)
+              + f". Tolerance unless a case says otherwise: {verdict.DEFAULT.describe()} (the reference's "
+              "distance at the time reached: the size of the orbit where the body is).", "",
+              verdict.markdown_counts(verdict_counts(report)), ""]
+    lines += ["Columns: the verdict; what happened (the error against the tolerance, the refusal's message, or "
+              "the budget) and what the integrator counted; t reached as a fraction of the case's end; "
               "relative energy error at the end and the largest over 100 checkpoints (for the parabola, "
               "relative to |T0| + |V0|); largest position error against the reference at the time reached "
               "(AU; for two-body cases the relative vector); steps; wall time.", ""]
@@ -618,15 +665,17 @@ def markdown(report, command=None):
         how = ref.get("how", "")
         if ref.get("uncertainty"):
             how += f" = {ref['uncertainty']:.2g} AU"
-        lines += [f"Reference: {how}. "
+        tolerance = "" if case.tolerance == verdict.DEFAULT else f"Tolerance: {case.tolerance.describe()}. "
+        lines += [f"Reference: {how}. " + tolerance
                   + (f"Fixed steps: {case.fixed_dt:.3g} yr (pfvi epsilon = 0, WHFast). " if case.fixed_dt else
                      f"WHFast dt = {case.whfast_step:.3g} yr. ") + case.note, ""]
-        lines += ["| integrator | t reached | energy error (end / max) | position error | steps | wall s | "
-                  "what happened |", "|---|---|---|---|---|---|---|"]
+        lines += ["| integrator | verdict | what happened | t reached | energy error (end / max) | position error "
+                  "[AU] | steps | wall s |", "|---|---|---|---|---|---|---|---|"]
         for r in rows:
-            lines.append(f"| {r['integrator']} | {_fmt(r['fraction'], '.3g')} | {_fmt(r['energy_error'])} / "
+            lines.append(f"| {r['integrator']} | {r.get('verdict', '-')} | {r['what_happened'].replace('|', '/')} | "
+                         f"{_fmt(r['fraction'], '.3g')} | {_fmt(r['energy_error'])} / "
                          f"{_fmt(r['energy_error_max'])} | {_fmt(r['position_error'])} | {_fmt(r['steps'], 'd')} | "
-                         f"{_fmt(r['wall_s'], '.3g')} | {r['what_happened'].replace('|', '/')} |")
+                         f"{_fmt(r['wall_s'], '.3g')} |")
         lines.append("")
     return "\n".join(lines)
 

@@ -125,7 +125,12 @@ def test_quick_cli_run_writes_table_data_and_png_with_every_integrator(tmp_path,
     png = (out / "kepler-e0.9.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20000
     assert len((out / "kepler-e0.9.csv").read_text().splitlines()) == data["settings"] + 1
-    assert "Fastest to a position error" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "Fastest to a position error" in out
+    # Every run has a verdict, counted per integrator on the page and on the command line.
+    assert {r["verdict"] for r in data["rows"]} <= {"accurate", "inaccurate", "refused", "crashed"}
+    assert "## Verdicts" in table and "| **all** |" in table
+    assert "Verdicts" in out and "inaccurate" in out
 
 
 @pytest.mark.parametrize("argv,words", [

@@ -103,8 +103,18 @@ def test_cli_writes_the_report(tmp_path):
     assert rows["radial-infall", "IAS15"]["position_error"] < 1e-12
     assert rows["radial-infall", "pfvi phase s=4"]["position_error"] < 1e-6
     assert rows["radial-infall", "pfvi phase s=2"]["position_error"] < 1e-3
+    # Finished is not enough: s = 2 ends the infall with an energy error of 7.8.
+    assert {rows["radial-infall", f"pfvi {f} s=2"]["verdict"] for f in stability.FITTINGS} == {"inaccurate"}
+    assert rows["radial-infall", "IAS15"]["verdict"] == rows["flyby-e5", "IAS15"]["verdict"] == "accurate"
     text = (tmp_path / "out" / "stability.md").read_text()
     assert "## radial-infall" in text and "## flyby-e5" in text and "rebound-pfvi stability" in text
+    counts = {}
+    for r in rows.values():
+        counts.setdefault(r["integrator"], []).append(r["verdict"])
+    for name, verdicts in counts.items():  # the page counts the verdicts per integrator
+        line = f"| {name} | " + " | ".join(str(verdicts.count(v)) for v in stability.verdict.VERDICTS) + " |"
+        assert line in text
+    assert "Verdicts" in done.stdout and "IAS15" in done.stdout
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
 
 
