@@ -108,8 +108,9 @@ def build_parser():
         "compare", help="error against run time: pfvi, IAS15, WHFast, LEAPFROG, BS on a scene",
         description="Sweeps every integrator's accuracy knob on a scene and writes <scene>.md (tables), "
                     ".json, .csv and .png (work-precision diagram) to --output.")
-    compare.add_argument("--scene", default="kepler", choices=("kepler", "comet", "triple", "oscillator"),
-                         help="default kepler (e = 0.95, 100 periods)")
+    compare.add_argument("--scene", default="comet", choices=("kepler", "comet", "triple", "oscillator"),
+                         help="default comet (Sun, Jupiter and an e = 0.95 comet, 3 comet periods: no "
+                              "integrator is exact on it); kepler: two bodies, e = 0.95, 100 periods")
     for option, (_, kind, scenes, text) in SCENE_OPTIONS.items():
         compare.add_argument(option, type=_number(kind) if kind == "number" else _quantity(kind), default=None,
                              help=f"{text} [{', '.join(scenes)}]")
@@ -223,10 +224,13 @@ def run_compare(parser, args, argv):
         print(f"\nInterrupted: {results.finished} of {len(settings)} runs finished and kept.", file=sys.stderr)
     print(f"Wrote {', '.join(paths.values())} ({results.wall_s:.1f} s)")
     _print_verdicts(results.verdict_counts(), results.rows, "line")
-    best = report.fastest(results.rows, 1e-6)
-    if best:
-        winner = min(best, key=lambda n: best[n]["wall_s"])
-        print(f"Fastest to a position error of 1e-6 AU: {winner} ({best[winner]['wall_s']:.3g} s)")
+    print("Fastest to a position error (wall time, best of the sweep):")
+    length = report.length_unit(results)
+    for sentence in report.conclusions(results, results.reference.get("uncertainty", 0.0), length):
+        print("- " + sentence)
+    caveat = report.whfast_caveat(results)
+    if caveat:
+        print(caveat.replace("**", "").replace("`", ""))
     return 130 if results.interrupted else 0
 
 

@@ -79,6 +79,86 @@ def summary_table(rows, floor=0.0, length="AU"):
     return "\n".join(lines)
 
 
+#: How each family gets to its accuracy: the reason behind its cost per unit of accuracy.
+HOW = {
+    "pfvi": "pfvi is implicit: each step solves its stage equations by iteration (several force evaluations per "
+            "stage), with adaptive steps from osculating circles; s = 2 is of order 2, s = 4 of order 6",
+    "ias15": "IAS15 is a 15th-order adaptive predictor-corrector: long steps, each of several force evaluations",
+    "bs": "BS (Gragg-Bulirsch-Stoer) extrapolates to high order with adaptive steps",
+    "whfast": "WHFast takes fixed steps of an exact Kepler drift and interaction kicks (second order); its "
+              "error is that of the kicks, so it is cheap where the motion is nearly Keplerian and the step "
+              "resolves the closest approach",
+    "leapfrog": "LEAPFROG takes fixed second-order steps: an eccentric orbit's pericentre needs very many of them",
+}
+
+
+def whfast_caveat(results):
+    """A sentence on what WHFast's result means on this scene, or "" if nothing needs saying."""
+    scene = results.scene
+    if not any(r["family"] == "whfast" for r in results.rows):
+        return ""
+    if scene.name == "kepler" or (scene.name == "custom" and scene.build().N == 2):
+        return ("**WHFast caveat**: this is a pure two-body Kepler problem, which WHFast solves exactly "
+                "(its Kepler drift is the solution and the kick vanishes), so its error is round-off at any "
+                "step: its rank here says nothing about perturbed problems. For a fair ranking run "
+                "`rebound-pfvi compare --scene comet`.")
+    if scene.name == "comet":
+        return ("WHFast is not exact here: Jupiter's pull, and the Sun's offset from the Sun-Jupiter "
+                "barycentre about which its Jacobi coordinates drift the comet, enter as kicks, largest at the "
+                "comet's pericentre, and its fixed steps (counted per comet period) cross that passage in few "
+                "steps.")
+    return ""
+
+
+def _per_evaluation(row):
+    return row["wall_s"] / row["force_evaluations"] * 1e6 if row.get("force_evaluations") else math.nan
+
+
+def conclusions(results, floor=0.0, length="AU"):
+    """One sentence per position error: who is fastest, by how much, and the measured reason
+    (force evaluations and wall time per evaluation against the best pfvi run)."""
+    sentences = []
+    for target in [t for t in TARGETS if t > floor]:
+        best = fastest(results.rows, target)
+        if not best:
+            sentences.append(f"To {target:.0e} {length}: no run of the sweep gets there.")
+            continue
+        order = sorted(best.values(), key=lambda r: r["wall_s"])
+        win = order[0]
+        text = f"To {target:.0e} {length}: {win['line']} ({_knob(win)}) is fastest, {win['wall_s']:.3g} s"
+        # The runner-up of another family; pfvi gets its own clause unless it wins.
+        other = next((r for r in order[1:] if r["family"] != win["family"]
+                      and (win["family"] == "pfvi" or r["family"] != "pfvi")), None)
+        if other:
+            text += f", {other['wall_s'] / win['wall_s']:.2g}x faster than {other['line']} ({_knob(other)})"
+        pfvi = next((r for r in order if r["family"] == "pfvi"), None)
+        if win["family"] != "pfvi":
+            if pfvi is None:
+                text += "; no pfvi run of the sweep gets there"
+            else:
+                text += (f"; the fastest pfvi, {pfvi['line']} ({_knob(pfvi)}), takes {pfvi['wall_s']:.3g} s "
+                         f"({pfvi['wall_s'] / win['wall_s']:.2g}x): {win['line']} needs "
+                         f"{win['force_evaluations']} force evaluations at {_per_evaluation(win):.2g} µs each, "
+                         f"pfvi {pfvi['force_evaluations']} at {_per_evaluation(pfvi):.2g} µs")
+        elif other:
+            text += (f": pfvi needs {win['force_evaluations']} force evaluations at {_per_evaluation(win):.2g} µs "
+                     f"each, {other['line']} {other['force_evaluations']} at {_per_evaluation(other):.2g} µs")
+        sentences.append(text + ".")
+    return sentences
+
+
+def conclusions_section(results, floor=0.0, length="AU"):
+    """The page's answer in words: who is fastest at each accuracy, why, and the WHFast caveat."""
+    families = list(dict.fromkeys(r["family"] for r in results.rows))
+    parts = ["\n".join(f"- {s}" for s in conclusions(results, floor, length)),
+             "Why (the wall time per force evaluation above is one evaluation plus the integrator's own work "
+             "per evaluation):\n\n" + "\n".join(f"- {HOW[f]}." for f in families if f in HOW)]
+    caveat = whfast_caveat(results)
+    if caveat:
+        parts.append(caveat)
+    return "\n\n".join(parts)
+
+
 def verdict_section(results):
     """What the verdicts mean, the tolerance, and the runs counted per verdict and integrator."""
     from . import verdict
@@ -174,6 +254,10 @@ particle from its reference position at t_end (Kepler: of the relative position)
 ## Verdicts
 
 {verdict_section(results)}
+
+## Who is fastest at each accuracy, and why
+
+{conclusions_section(results, floor, length)}
 
 ## Fastest run of each integrator that reaches a position error
 

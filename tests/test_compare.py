@@ -112,7 +112,7 @@ def test_ctrl_c_stops_and_keeps_finished_runs(tmp_path, workers):
 
 def test_quick_cli_run_writes_table_data_and_png_with_every_integrator(tmp_path, capsys):
     out = tmp_path / "results"
-    code = main(["compare", "--e", "0.9", "--periods", "2", "--repeats", "1", "--samples", "4", "--workers", "1",
+    code = main(["compare", "--scene", "kepler", "--e", "0.9", "--periods", "2", "--repeats", "1", "--samples", "4", "--workers", "1",
                  "--output", str(out)])
     assert code == 0
     data = json.loads((out / "kepler-e0.9.json").read_text())
@@ -131,6 +131,30 @@ def test_quick_cli_run_writes_table_data_and_png_with_every_integrator(tmp_path,
     assert {r["verdict"] for r in data["rows"]} <= {"accurate", "inaccurate", "refused", "crashed"}
     assert "## Verdicts" in table and "| **all** |" in table
     assert "Verdicts" in out and "inaccurate" in out
+    # WHFast is exact on two bodies: the page and the command line say so.
+    assert "**WHFast caveat**: this is a pure two-body Kepler problem" in table
+    assert "WHFast caveat: this is a pure two-body Kepler problem" in out
+
+
+def test_main_job_is_the_comet_and_its_page_says_who_is_fastest_and_why(tmp_path, capsys):
+    """The README's first command runs a scene in which no integrator is exact (issue 18, item 2)."""
+    out = tmp_path / "results"
+    assert main(["compare", "--periods", "0.5", "--repeats", "1", "--samples", "3", "--workers", "1",
+                 "--output", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["comet-e0.95.csv", "comet-e0.95.json", "comet-e0.95.md",
+                                                    "comet-e0.95.png"]
+    page = (out / "comet-e0.95.md").read_text()
+    data = json.loads((out / "comet-e0.95.json").read_text())
+    assert "## Who is fastest at each accuracy, and why" in page and "WHFast is not exact here" in page
+    assert "WHFast caveat" not in page
+    best = report.fastest(data["rows"], 1e-2)
+    winner = min(best.values(), key=lambda r: r["wall_s"])
+    # The sentence names the measured winner, its time and its force evaluations.
+    sentence = next(line for line in page.splitlines() if line.startswith("- To 1e-02 AU: "))
+    assert sentence.startswith(f"- To 1e-02 AU: {winner['line']} ") and f"{winner['wall_s']:.3g} s" in sentence
+    if winner["family"] != "pfvi":
+        assert f"needs {winner['force_evaluations']} force evaluations" in sentence
+    assert "- To 1e-02 AU: " in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("argv,words", [
