@@ -6,9 +6,11 @@ scene), ``stability`` (stiff and extreme cases), ``paper fig1|fig2|fig3``
 (astropy, matplotlib, dask) happen only in the command that needs them.
 """
 import argparse
+import os
 import shlex
 import sys
-import time
+import threading
+from typing import Any, Dict, List, Optional, TextIO
 
 # Scene parameters: option -> (scene keyword, kind of quantity, scenes that take it, help).
 SCENE_OPTIONS = {
@@ -161,29 +163,54 @@ def build_parser():
 
 
 class Progress:
-    """A one-line progress bar on stderr (a line per run when not a terminal)."""
+    """A progress bar with the elapsed time and the time left (tqdm), on stderr.
 
-    def __init__(self, stream=None):
-        self.stream = stream or sys.stderr
-        self.tty = self.stream.isatty()
-        self.start = time.perf_counter()
+    It shows what finished last and how many runs did not finish, never a
+    run's message: the command lists those in full at the end. tqdm is
+    imported here, when a long command starts, not with the package."""
 
-    def __call__(self, done, total, row=None):
-        elapsed = time.perf_counter() - self.start
-        what = ""
+    def __init__(self, total: int, unit: str = "run", stream: Optional[TextIO] = None) -> None:
+        from tqdm import tqdm
+
+        self.bar = tqdm(total=total, unit=unit, file=stream or sys.stderr, dynamic_ncols=True, mininterval=0.5,
+                        smoothing=0.1, bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}<{remaining}{postfix}]")
+        self.not_finished = 0
+        # Redraw every second, so that the elapsed time moves while a long run is under way.
+        self._stop = threading.Event()
+        self._ticker = threading.Thread(target=self._tick, daemon=True)
+        self._ticker.start()
+
+    def _tick(self) -> None:
+        while not self._stop.wait(1.0):
+            self.bar.refresh()
+
+    def __call__(self, done: int, total: int, row: Optional[Dict[str, Any]] = None) -> None:
+        """compare's and paper's callback: `done` of `total` finished, `row` the last one."""
         if row is not None:
-            what = f"{row['line']} {row['knob']}={row['value']:g}"
-            if row["status"] != "ok":
-                what += f" [{row['status'][:60]}]"
-        if self.tty:
-            width = 30
-            bar = "#" * (width * done // total) + "." * (width - width * done // total)
-            self.stream.write(f"\r[{bar}] {done}/{total} {elapsed:5.0f} s  {what[:50]:<50}")
-            if done == total:
-                self.stream.write("\n")
-        else:
-            self.stream.write(f"[{done}/{total}] {elapsed:.0f} s {what}\n")
-        self.stream.flush()
+            self.finished_one(f"{row['line']} {row['knob']}={row['value']:g}",
+                              row.get("verdict") in ("refused", "crashed", "over budget"))
+        self.bar.update(done - self.bar.n)
+        if done >= total:
+            self.close()
+
+    def finished_one(self, what: str, failed: bool) -> None:
+        """Names the run that finished last; counts it if it did not finish."""
+        self.not_finished += bool(failed)
+        postfix = f"last: {what}"
+        if self.not_finished:
+            postfix += f"; not finished: {self.not_finished} (listed at the end)"
+        self.bar.set_postfix_str(postfix, refresh=False)
+
+    def close(self) -> None:
+        self._stop.set()
+        self.bar.close()
+
+
+def invocation(argv: List[str]) -> str:
+    """The command as it was run, for the pages it writes: the installed
+    ``rebound-pfvi`` script or ``python3 -P -m rebound_pfvi``, and the arguments."""
+    program = "rebound-pfvi" if os.path.basename(sys.argv[0]) == "rebound-pfvi" else "python3 -P -m rebound_pfvi"
+    return " ".join([program] + [shlex.quote(a) for a in argv])
 
 
 def _scene_from_args(parser, args):
@@ -216,14 +243,22 @@ def run_compare(parser, args, argv):
         parser.error(f"argument --integrators: none of {', '.join(args.integrators)} applies to scene "
                      f"{scene.name!r} (it takes: {', '.join(scene.families)})")
     print(f"{scene.describe()}: {len(settings)} runs, best of {args.repeats}", flush=True)
-    results = compare.run(scene, settings, repeats=args.repeats, samples=args.samples, workers=args.workers,
-                          scheduler=args.scheduler, progress=Progress())
-    command = "rebound-pfvi " + " ".join(shlex.quote(a) for a in argv)
+    bar = Progress(len(settings))
+    try:
+        results = compare.run(scene, settings, repeats=args.repeats, samples=args.samples, workers=args.workers,
+                              scheduler=args.scheduler, progress=bar)
+    finally:
+        bar.close()
+    command = invocation(argv)
     paths = report.write(results, args.output, command=command)
     if results.interrupted:
         print(f"\nInterrupted: {results.finished} of {len(settings)} runs finished and kept.", file=sys.stderr)
     print(f"Wrote {', '.join(paths.values())} ({results.wall_s:.1f} s)")
     _print_verdicts(results.verdict_counts(), results.rows, "line")
+    warned = [r for r in results.rows if r.get("warnings")]
+    if warned:
+        print(f"REBOUND warned in {len(warned)} run(s), explained in the page's Warnings section:")
+        print(report.warnings_section(warned))
     print("Fastest to a position error (wall time, best of the sweep):")
     length = report.length_unit(results)
     for sentence in report.conclusions(results, results.reference.get("uncertainty", 0.0), length):
@@ -234,34 +269,47 @@ def run_compare(parser, args, argv):
     return 130 if results.interrupted else 0
 
 
-def run_paper(args):
+def run_paper(args, argv):
     from . import paper as seed_paper
 
     if args.figure == "fig1":
-        seed_paper.figure1(args.output, stages=args.stages or 2, step_control=args.step_control or "seed",
-                           progress=lambda row: print(
-                               f"e = {row['e']}, epsilon = {row['epsilon']:.0e}: phase {row['phase_steps']} steps,"
-                               f" none {row['none_steps']} steps", flush=True))
-        return 0
-    stages, control = args.stages or 4, args.step_control or "reversible"
-    if args.figure == "fig2":
-        progress = Progress()
-        periods = args.periods or 1e5
-        command = (f"python3 -P -m rebound_pfvi paper fig2 --output {args.output} --periods {periods:g} "
-                   f"--samples {args.samples} --stages {stages} --epsilon {args.epsilon:g} --step-control {control}")
+        stages, control = args.stages or 2, args.step_control or "seed"
+        bar = Progress(len(seed_paper.ECCENTRICITIES) * len(seed_paper.EPSILONS), unit="tolerance")
+
+        def progress(row):
+            bar.finished_one(f"e = {row['e']}, epsilon = {row['epsilon']:.0e}: phase {row['phase_steps']} steps, "
+                             f"none {row['none_steps']} steps", False)
+            bar.bar.update(1)
+
+        command = invocation(argv)
         try:
-            rows, wall = seed_paper.figure2(args.output, periods=periods, samples=args.samples, stages=stages,
-                                            epsilon=args.epsilon, step_control=control,
-                                            progress=lambda k, n: progress(k, n) if k % max(1, n // 200) == 0
-                                            or k == n else None, command=command)
+            rows = seed_paper.figure1(args.output, stages=stages, step_control=control, progress=progress,
+                                      command=command)
         except KeyboardInterrupt:
             print("\nInterrupted: nothing written.", file=sys.stderr)
             return 130
+        finally:
+            bar.close()
+        print(f"Figure 1: {len(rows)} tolerances; wrote {args.output}/figure1.md, .png, .json")
+        return 0
+    stages, control = args.stages or 4, args.step_control or "reversible"
+    if args.figure == "fig2":
+        progress = Progress(args.samples, unit="sample")
+        periods = args.periods or 1e5
+        command = invocation(argv)
+        try:
+            rows, wall = seed_paper.figure2(args.output, periods=periods, samples=args.samples, stages=stages,
+                                            epsilon=args.epsilon, step_control=control,
+                                            progress=progress, command=command)
+        except KeyboardInterrupt:
+            print("\nInterrupted: nothing written.", file=sys.stderr)
+            return 130
+        finally:
+            progress.close()
         print(f"Figure 2: {rows[-1]['steps']} steps, run time {wall:.1f} s; wrote {args.output}/figure2.md, .png, .json")
         return 0
     periods = args.periods or 10
-    command = (f"python3 -P -m rebound_pfvi paper fig3 --output {args.output} --periods {periods:g} "
-               f"--stages {stages} --epsilon {args.epsilon:g} --step-control {control}")
+    command = invocation(argv)
     rows, wall = seed_paper.figure3(args.output, periods=periods, stages=stages, epsilon=args.epsilon,
                                     step_control=control, command=command)
     print(f"Figure 3: {len(rows)} steps, run time {wall:.1f} s; wrote {args.output}/figure3.md, .png, .json")
@@ -280,22 +328,23 @@ def run_stability(args, argv):
     total = len(names) * len(configs)
     print(f"{len(names)} cases x {len(configs)} integrators = {total} runs, {args.workers} at once, "
           f"budget {args.budget:g} s each", flush=True)
-    bar = Progress()
-    done = [0]
+    bar = Progress(total)
+    jobs = [(name, config.label) for name in names for config in configs]
 
     def progress(index, outcome):
-        done[0] += 1
-        row = outcome[1] if outcome[0] == "ok" else None
-        what = f"{row['case']}: {row['integrator']} {row['status'][:40]}" if row else f"[{outcome[0]}]"
-        bar.stream.write(f"[{done[0]}/{total}] {time.perf_counter() - bar.start:.0f} s {what}\n")
-        bar.stream.flush()
+        name, label = jobs[index]
+        failed = outcome[0] != "ok" or not outcome[1]["status"].startswith("finished")
+        bar.finished_one(f"{name}: {label}", failed)
+        bar.bar.update(1)
 
     try:
         report = stability.run_all(names, configs, budget=args.budget, workers=args.workers, progress=progress)
     except KeyboardInterrupt:
         print("\nInterrupted: nothing written.", file=sys.stderr)
         return 130
-    command = "rebound-pfvi " + " ".join(shlex.quote(a) for a in argv)
+    finally:
+        bar.close()
+    command = invocation(argv)
     paths = stability.write(report, args.output, command=command)
     print(f"Wrote {', '.join(map(str, paths))} ({report.wall_s:.0f} s)")
     _print_verdicts(stability.verdict_counts(report), report.rows, "integrator")
@@ -325,7 +374,7 @@ def main(argv=None):
     if args.command == "compare":
         return run_compare(parser, args, argv)
     if args.command == "paper":
-        return run_paper(args)
+        return run_paper(args, argv)
     if args.command == "stability":
         return run_stability(args, argv)
     from .demo import run_demo

@@ -140,8 +140,38 @@ def _install_counter(sim, scene, counter):
         sim.additional_forces = count
 
 
+#: What REBOUND's warnings mean for a row, for the page and the command line.
+WARNING_MEANINGS = {
+    "predictor corrector loops in IAS15 did not converge":
+        "IAS15's predictor-corrector iteration hit its limit in 10 or more steps, REBOUND's sign that the "
+        "steps are too long for the tolerance; the run went on, and its error is measured like any other",
+}
+
+
+def explain_warning(message):
+    """A REBOUND warning in the words of :data:`WARNING_MEANINGS` (else the message itself)."""
+    for key, meaning in WARNING_MEANINGS.items():
+        if key in message:
+            return meaning
+    return message
+
+
 def run_setting(scene, setting, reference, repeats=3, samples=100):
-    """One row of results for `setting` on `scene` (see the module docstring)."""
+    """One row of results for `setting` on `scene` (see the module docstring).
+
+    Warnings raised during the runs (IAS15's "predictor corrector loops did
+    not converge" at loose tolerances) are kept in the row's "warnings", not
+    printed from the worker process."""
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        row = _run_setting(scene, setting, reference, repeats, samples)
+    row["warnings"] = sorted({str(w.message) for w in caught})
+    return row
+
+
+def _run_setting(scene, setting, reference, repeats, samples):
     row = {"scene": scene.name, "family": setting.family, "line": setting.line, "knob": setting.knob,
            "value": setting.value, "options": dict(setting.options), "status": "ok"}
     t_end = scene.t_end

@@ -44,6 +44,8 @@ def markdown_table(rows, length="AU"):
         note = ""
         if r.get("verdict") == "inaccurate":
             note = r["verdict_detail"]
+        if r.get("warnings"):
+            note += ("; " if note else "") + "REBOUND warned (below)"
         if r["family"] == "pfvi":
             note += ("; " if note else "") + (f"{r['attempts_per_step']:.1f} trials/step, "
                                               f"{r['iterations_mean']:.1f} iterations")
@@ -110,6 +112,10 @@ def whfast_caveat(results):
     return ""
 
 
+def _times(ratio):
+    return f"{ratio:.0f}x" if ratio >= 10 else f"{ratio:.1f}x"
+
+
 def _per_evaluation(row):
     return row["wall_s"] / row["force_evaluations"] * 1e6 if row.get("force_evaluations") else math.nan
 
@@ -130,14 +136,14 @@ def conclusions(results, floor=0.0, length="AU"):
         other = next((r for r in order[1:] if r["family"] != win["family"]
                       and (win["family"] == "pfvi" or r["family"] != "pfvi")), None)
         if other:
-            text += f", {other['wall_s'] / win['wall_s']:.2g}x faster than {other['line']} ({_knob(other)})"
+            text += f", {_times(other['wall_s'] / win['wall_s'])} faster than {other['line']} ({_knob(other)})"
         pfvi = next((r for r in order if r["family"] == "pfvi"), None)
         if win["family"] != "pfvi":
             if pfvi is None:
                 text += "; no pfvi run of the sweep gets there"
             else:
                 text += (f"; the fastest pfvi, {pfvi['line']} ({_knob(pfvi)}), takes {pfvi['wall_s']:.3g} s "
-                         f"({pfvi['wall_s'] / win['wall_s']:.2g}x): {win['line']} needs "
+                         f"({_times(pfvi['wall_s'] / win['wall_s'])}): {win['line']} needs "
                          f"{win['force_evaluations']} force evaluations at {_per_evaluation(win):.2g} µs each, "
                          f"pfvi {pfvi['force_evaluations']} at {_per_evaluation(pfvi):.2g} µs")
         elif other:
@@ -157,6 +163,17 @@ def conclusions_section(results, floor=0.0, length="AU"):
     if caveat:
         parts.append(caveat)
     return "\n\n".join(parts)
+
+
+def warnings_section(rows):
+    """REBOUND's warnings, each explained once, with the runs that raised it."""
+    from .compare import explain_warning
+
+    by_message = {}
+    for r in rows:
+        for message in r.get("warnings", ()):
+            by_message.setdefault(message, []).append(f"{r['line']} {_knob(r)}")
+    return "\n".join(f"- \"{m}\" ({', '.join(runs)}): {explain_warning(m)}." for m, runs in by_message.items())
 
 
 def verdict_section(results):
@@ -268,7 +285,11 @@ particle from its reference position at t_end (Kepler: of the relative position)
 ## Every run
 
 {markdown_table(results.rows, length)}
-"""
+""" + (f"""
+## Warnings
+
+{warnings_section(results.rows)}
+""" if any(r.get("warnings") for r in results.rows) else "")
     with open(base + ".md", "w") as f:
         f.write(text)
     paths["md"] = base + ".md"
