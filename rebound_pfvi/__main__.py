@@ -99,9 +99,34 @@ def _stability_families(text):
     return names
 
 
-def build_parser():
+def version_text() -> str:
+    """The package's version, the running rebound's, and the one the C core was compiled against."""
+    import rebound
+
+    import rebound_pfvi
+    from rebound_pfvi._core import lib
+
+    compiled = lib.pfvi_rebound_version_compiled().decode()
+    return (f"rebound-pfvi {rebound_pfvi.__version__} (rebound {rebound.__version__}; C core compiled against "
+            f"rebound {compiled})")
+
+
+class _Version(argparse.Action):
+    """--version, computed when asked for: importing rebound_pfvi loads the C core."""
+
+    def __init__(self, option_strings: List[str], dest: str = argparse.SUPPRESS, **kwargs: Any) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any,
+                 option_string: Optional[str] = None) -> None:
+        print(version_text())
+        parser.exit()
+
+
+def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="rebound-pfvi",
                                      description="Phase-fitted discrete Lagrangian integrator for REBOUND.")
+    parser.add_argument("--version", action=_Version, help="print the versions of rebound-pfvi and rebound, and exit")
     commands = parser.add_subparsers(dest="command")
     demo = commands.add_parser("demo", help="circular and e = 0.95 orbits with pfvi, IAS15 and WHFast (default)")
     demo.add_argument("--orbits", type=_positive_int, default=100, help="orbits to integrate (default 100)")
@@ -126,7 +151,8 @@ def build_parser():
                          help="processes of the local pool (default: the number of cores; 1: no pool)")
     compare.add_argument("--scheduler", default=None, metavar="ADDRESS",
                          help="send the runs to this Dask distributed scheduler (needs the [dask] extra)")
-    compare.add_argument("--output", default="rebound-pfvi-results", help="folder for the results")
+    compare.add_argument("--output", default="rebound-pfvi-results",
+                         help="folder for the results (default: %(default)s, in the current folder)")
 
     stability = commands.add_parser(
         "stability", help="stiff and extreme cases: pfvi (every fitting, s = 2 and 4) beside IAS15 and WHFast",
@@ -144,9 +170,13 @@ def build_parser():
     stability.add_argument("--budget", type=_positive_float, default=60.0,
                            help="seconds of integration per run before it is stopped (default 60)")
     stability.add_argument("--workers", type=_positive_int, default=2, help="runs at once (default 2)")
-    stability.add_argument("--output", default="rebound-pfvi-stability", help="folder for the report")
+    stability.add_argument("--output", default="rebound-pfvi-stability",
+                           help="folder for the report (default: %(default)s, in the current folder)")
 
     paper = commands.add_parser("paper", help="rerun a figure of the seed paper")
+    # Errors found after parsing are reported by the subcommand's parser, with its usage.
+    for sub in (demo, compare, stability, paper):
+        sub.set_defaults(subparser=sub)
     paper.add_argument("figure", choices=("fig1", "fig2", "fig3"),
                        help="fig1: steps against energy error, phase vs none; fig2: energy and position error "
                             "over 1e5 periods at e = 0.95; fig3: the curvature frequency over 10 periods")
@@ -213,7 +243,7 @@ def invocation(argv: List[str]) -> str:
     return " ".join([program] + [shlex.quote(a) for a in argv])
 
 
-def _scene_from_args(parser, args):
+def _scene_from_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
     from . import scenes
 
     params = {}
@@ -231,7 +261,7 @@ def _scene_from_args(parser, args):
         parser.error(f"scene {args.scene}: {error}")
 
 
-def run_compare(parser, args, argv):
+def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv: List[str]) -> int:
     from . import compare, report
 
     scene = _scene_from_args(parser, args)
@@ -269,7 +299,7 @@ def run_compare(parser, args, argv):
     return 130 if results.interrupted else 0
 
 
-def run_paper(args, argv):
+def run_paper(args: argparse.Namespace, argv: List[str]) -> int:
     from . import paper as seed_paper
 
     if args.figure == "fig1":
@@ -294,18 +324,18 @@ def run_paper(args, argv):
         return 0
     stages, control = args.stages or 4, args.step_control or "reversible"
     if args.figure == "fig2":
-        progress = Progress(args.samples, unit="sample")
+        samples_bar = Progress(args.samples, unit="sample")
         periods = args.periods or 1e5
         command = invocation(argv)
         try:
             rows, wall = seed_paper.figure2(args.output, periods=periods, samples=args.samples, stages=stages,
                                             epsilon=args.epsilon, step_control=control,
-                                            progress=progress, command=command)
+                                            progress=samples_bar, command=command)
         except KeyboardInterrupt:
             print("\nInterrupted: nothing written.", file=sys.stderr)
             return 130
         finally:
-            progress.close()
+            samples_bar.close()
         print(f"Figure 2: {rows[-1]['steps']} steps, run time {wall:.1f} s; wrote {args.output}/figure2.md, .png, .json")
         return 0
     periods = args.periods or 10
@@ -316,7 +346,7 @@ def run_paper(args, argv):
     return 0
 
 
-def run_stability(args, argv):
+def run_stability(args: argparse.Namespace, argv: List[str]) -> int:
     from . import stability
 
     if args.list:
@@ -351,7 +381,7 @@ def run_stability(args, argv):
     return 0
 
 
-def _print_verdicts(counts, rows, key):
+def _print_verdicts(counts: Dict[str, Dict[str, int]], rows: List[Dict[str, Any]], key: str) -> None:
     """The verdicts counted per integrator, then every run that did not finish, with its whole message."""
     from .verdict import ACCURATE, INACCURATE, text_counts
 
@@ -367,12 +397,12 @@ def _print_verdicts(counts, rows, key):
             print(f"- {where}{r[key]}{knob}: {r['verdict']}: {r['verdict_detail']}")
 
 
-def main(argv=None):
+def main(argv: Optional[List[str]] = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command == "compare":
-        return run_compare(parser, args, argv)
+        return run_compare(args.subparser, args, argv)
     if args.command == "paper":
         return run_paper(args, argv)
     if args.command == "stability":

@@ -23,11 +23,24 @@ compare wall times within one sweep, not across machines or sweeps.
 Everything here is unitless (AU, yr, Msun); :class:`Results` converts to
 astropy Quantities at the boundary.
 """
+from __future__ import annotations
+
 import math
 import os
 import signal
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
+
+if TYPE_CHECKING:
+    import rebound
+
+    from .scenes import Scene
+
+#: A row of results: one run of one setting (see :func:`run_setting`).
+Row = Dict[str, Any]
+#: progress(done, total, row), called after each run.
+ProgressCallback = Callable[[int, int, Row], None]
 
 FAMILIES = ("pfvi", "ias15", "whfast", "leapfrog", "bs")
 #: The accuracy knob of each family, as the table and plot call it.
@@ -41,10 +54,10 @@ class Setting:
 
     family: str
     value: float
-    options: tuple = ()  # (name, value) pairs, e.g. (("stages", 4), ("fitting", "phase"))
+    options: Tuple[Tuple[str, Any], ...] = ()  # (name, value) pairs, e.g. (("stages", 4), ("fitting", "phase"))
     line: str = field(default="", compare=False)  # plot line and table group
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.family not in FAMILIES:
             raise ValueError(f"family={self.family!r} is not an integrator family; allowed: {', '.join(FAMILIES)}")
         if not (isinstance(self.value, (int, float)) and self.value > 0 and math.isfinite(self.value)):
@@ -62,7 +75,7 @@ class Setting:
             object.__setattr__(self, "line", label)
 
     @property
-    def knob(self):
+    def knob(self) -> str:
         return KNOBS[self.family]
 
 
@@ -75,7 +88,8 @@ BS_EPS = {"quick": (1e-4, 1e-7, 1e-10, 1e-13), "full": tuple(10.0 ** -k for k in
 FIXED_STEPS = {"quick": (100, 1000, 10000), "full": (30, 100, 300, 1000, 3000, 10000, 30000)}
 
 
-def default_settings(scene, size="quick", families=None):
+def default_settings(scene: Scene, size: str = "quick",
+                     families: Optional[Sequence[str]] = None) -> List[Setting]:
     """The sweep for `scene`: pfvi stages x fitting x epsilon (and the scene's
     frequency options), IAS15 epsilon, BS tolerance, WHFast and LEAPFROG steps
     per period. `families` restricts it."""
@@ -107,7 +121,7 @@ def default_settings(scene, size="quick", families=None):
     return settings
 
 
-def configure(sim, scene, setting):
+def configure(sim: rebound.Simulation, scene: Scene, setting: Setting) -> None:
     """Sets the integrator of `sim` as `setting` asks."""
     opts = dict(setting.options)
     if setting.family == "pfvi":
@@ -132,7 +146,7 @@ def configure(sim, scene, setting):
         sim.dt = scene.period / setting.value
 
 
-def _install_counter(sim, scene, counter):
+def _install_counter(sim: rebound.Simulation, scene: Scene, counter: List[int]) -> None:
     if not scene.counts_own_forces:
         def count(simp):
             counter[0] += 1
@@ -148,7 +162,7 @@ WARNING_MEANINGS = {
 }
 
 
-def explain_warning(message):
+def explain_warning(message: str) -> str:
     """A REBOUND warning in the words of :data:`WARNING_MEANINGS` (else the message itself)."""
     for key, meaning in WARNING_MEANINGS.items():
         if key in message:
@@ -156,7 +170,8 @@ def explain_warning(message):
     return message
 
 
-def run_setting(scene, setting, reference, repeats=3, samples=100):
+def run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repeats: int = 3,
+                samples: int = 100) -> Row:
     """One row of results for `setting` on `scene` (see the module docstring).
 
     Warnings raised during the runs (IAS15's "predictor corrector loops did
@@ -171,8 +186,8 @@ def run_setting(scene, setting, reference, repeats=3, samples=100):
     return row
 
 
-def _run_setting(scene, setting, reference, repeats, samples):
-    row = {"scene": scene.name, "family": setting.family, "line": setting.line, "knob": setting.knob,
+def _run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repeats: int, samples: int) -> Row:
+    row: Row = {"scene": scene.name, "family": setting.family, "line": setting.line, "knob": setting.knob,
            "value": setting.value, "options": dict(setting.options), "status": "ok"}
     t_end = scene.t_end
     try:
@@ -218,7 +233,7 @@ def _run_setting(scene, setting, reference, repeats, samples):
     return row
 
 
-def judge(scene, row):
+def judge(scene: Scene, row: Row) -> Tuple[str, str]:
     """(verdict, detail) of a row (:mod:`rebound_pfvi.verdict`), against the
     scene's ``tolerance`` if it has one, else the default."""
     from . import verdict
@@ -250,10 +265,10 @@ def _ignore_sigint():
 class Results:
     """The rows of a sweep and what is needed to read them."""
 
-    scene: object
-    settings: list
-    rows: list
-    reference: dict
+    scene: Scene
+    settings: List[Setting]
+    rows: List[Row]
+    reference: Dict[str, Any]
     repeats: int
     samples: int
     workers: int
@@ -262,16 +277,16 @@ class Results:
     interrupted: bool = False
 
     @property
-    def finished(self):
+    def finished(self) -> int:
         return len(self.rows)
 
-    def verdict_counts(self):
+    def verdict_counts(self) -> Dict[str, Dict[str, int]]:
         """{line: {verdict: runs}} (a line is an integrator with its options, e.g. "pfvi s=4 phase")."""
         from .verdict import count
 
         return count(self.rows, "line")
 
-    def to_dict(self):
+    def to_dict(self) -> Dict[str, Any]:
         from .units import REBOUND_UNITS
 
         own = getattr(self.scene, "unit_names", True) is None
@@ -285,7 +300,7 @@ class Results:
                 "scheduler": self.scheduler, "settings": len(self.settings), "finished": self.finished,
                 "interrupted": self.interrupted, "sweep_wall_s": self.wall_s, "rows": self.rows}
 
-    def table(self):
+    def table(self) -> Any:
         """The rows as an astropy QTable, with Quantities: position error in AU
         and km, wall time in s, the knob's step in yr for fixed-step runs."""
         import astropy.units as u
@@ -310,7 +325,9 @@ class Results:
         return t
 
 
-def run(scene, settings=None, repeats=3, samples=100, workers=None, scheduler=None, progress=None):
+def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int = 3, samples: int = 100,
+        workers: Optional[int] = None, scheduler: Any = None,
+        progress: Optional[ProgressCallback] = None) -> Results:
     """Runs a sweep; returns :class:`Results` (rows in the order of `settings`).
 
     workers: processes of the local pool (default: the machine's cores; 1 runs

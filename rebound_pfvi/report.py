@@ -1,18 +1,25 @@
 """Writing a sweep's results: JSON, CSV, a markdown page and a work-precision PNG."""
+from __future__ import annotations
+
 import csv
 import json
 import math
 import os
 import platform
+from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Optional
+
+if TYPE_CHECKING:
+    from .compare import Results, Row
 
 #: Position errors (AU) at which the summary names the fastest run of each line.
 TARGETS = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)
-COLUMNS = ("line", "knob", "value", "verdict", "verdict_detail", "status", "steps", "force_evaluations", "wall_s", "energy_error_max",
+COLUMNS = ("line", "knob", "value", "verdict", "verdict_detail", "status", "steps",
+           "force_evaluations", "wall_s", "energy_error_max",
            "energy_error_final", "position_error", "relative_position_error", "attempts_per_step",
            "iterations_mean")
 
 
-def _fmt(value, spec):
+def _fmt(value: Any, spec: str) -> str:
     if value is None:
         return "-"
     if isinstance(value, float) and not math.isfinite(value):
@@ -20,18 +27,18 @@ def _fmt(value, spec):
     return format(value, spec)
 
 
-def _knob(row):
+def _knob(row: Row) -> str:
     if row["knob"] == "steps/period":
         return f"{row['value']:g} steps/period"
     return f"{row['knob']} {row['value']:.0e}"
 
 
-def length_unit(results):
+def length_unit(results: Results) -> str:
     """How the page names the position error's unit."""
     return "AU" if getattr(results.scene, "unit_names", True) is not None else "sim. length unit"
 
 
-def markdown_table(rows, length="AU"):
+def markdown_table(rows: Iterable[Row], length: str = "AU") -> str:
     lines = ["| integrator | setting | verdict | steps | force evals | wall [s] | max rel. energy err | "
              f"final rel. energy err | position err [{length}] | note |",
              "|---|---|---|---|---|---|---|---|---|---|"]
@@ -56,9 +63,9 @@ def markdown_table(rows, length="AU"):
     return "\n".join(lines)
 
 
-def fastest(rows, target):
+def fastest(rows: Iterable[Row], target: float) -> Dict[str, Row]:
     """For each line, the run with the least wall time whose position error is <= target."""
-    best = {}
+    best: Dict[str, Row] = {}
     for r in rows:
         if r["status"] == "ok" and r["position_error"] <= target:
             if r["line"] not in best or r["wall_s"] < best[r["line"]]["wall_s"]:
@@ -66,7 +73,7 @@ def fastest(rows, target):
     return best
 
 
-def summary_table(rows, floor=0.0, length="AU"):
+def summary_table(rows: List[Row], floor: float = 0.0, length: str = "AU") -> str:
     lines_in_order = list(dict.fromkeys(r["line"] for r in rows))
     targets = [t for t in TARGETS if t > floor]
     head = "| position error <= | " + " | ".join(lines_in_order) + " |"
@@ -94,7 +101,7 @@ HOW = {
 }
 
 
-def whfast_caveat(results):
+def whfast_caveat(results: Results) -> str:
     """A sentence on what WHFast's result means on this scene, or "" if nothing needs saying."""
     scene = results.scene
     if not any(r["family"] == "whfast" for r in results.rows):
@@ -112,15 +119,15 @@ def whfast_caveat(results):
     return ""
 
 
-def _times(ratio):
+def _times(ratio: float) -> str:
     return f"{ratio:.0f}x" if ratio >= 10 else f"{ratio:.1f}x"
 
 
-def _per_evaluation(row):
+def _per_evaluation(row: Row) -> float:
     return row["wall_s"] / row["force_evaluations"] * 1e6 if row.get("force_evaluations") else math.nan
 
 
-def conclusions(results, floor=0.0, length="AU"):
+def conclusions(results: Results, floor: float = 0.0, length: str = "AU") -> List[str]:
     """One sentence per position error: who is fastest, by how much, and the measured reason
     (force evaluations and wall time per evaluation against the best pfvi run)."""
     sentences = []
@@ -153,7 +160,7 @@ def conclusions(results, floor=0.0, length="AU"):
     return sentences
 
 
-def conclusions_section(results, floor=0.0, length="AU"):
+def conclusions_section(results: Results, floor: float = 0.0, length: str = "AU") -> str:
     """The page's answer in words: who is fastest at each accuracy, why, and the WHFast caveat."""
     families = list(dict.fromkeys(r["family"] for r in results.rows))
     parts = ["\n".join(f"- {s}" for s in conclusions(results, floor, length)),
@@ -165,18 +172,18 @@ def conclusions_section(results, floor=0.0, length="AU"):
     return "\n\n".join(parts)
 
 
-def warnings_section(rows):
+def warnings_section(rows: Iterable[Row]) -> str:
     """REBOUND's warnings, each explained once, with the runs that raised it."""
     from .compare import explain_warning
 
-    by_message = {}
+    by_message: Dict[str, List[str]] = {}
     for r in rows:
         for message in r.get("warnings", ()):
             by_message.setdefault(message, []).append(f"{r['line']} {_knob(r)}")
     return "\n".join(f"- \"{m}\" ({', '.join(runs)}): {explain_warning(m)}." for m, runs in by_message.items())
 
 
-def verdict_section(results):
+def verdict_section(results: Results) -> str:
     """What the verdicts mean, the tolerance, and the runs counted per verdict and integrator."""
     from . import verdict
 
@@ -188,7 +195,7 @@ def verdict_section(results):
             + verdict.markdown_counts(results.verdict_counts()))
 
 
-def plot(results, path):
+def plot(results: Results, path: str) -> None:
     """Work-precision diagram: position error and largest energy error against wall time."""
     import matplotlib
 
@@ -219,14 +226,15 @@ def plot(results, path):
     plt.close(fig)
 
 
-def machine():
+def machine() -> Dict[str, Any]:
     import rebound
 
     return {"python": platform.python_version(), "rebound": rebound.__version__, "machine": platform.machine(),
             "cores": os.cpu_count()}
 
 
-def write(results, output, basename=None, command=None):
+def write(results: Results, output: str, basename: Optional[str] = None,
+          command: Optional[str] = None) -> Dict[str, str]:
     """Writes <basename>.json, .csv, .md and .png (if matplotlib is installed)
     into `output` (basename: the scene's slug, e.g. kepler-e0.95); returns the
     paths written."""

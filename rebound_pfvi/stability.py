@@ -18,13 +18,29 @@ elements with the mean anomaly advanced; the radial Kepler equation for the
 infall); otherwise IAS15 at epsilon 1e-11, with its distance to a run at
 1e-10 reported as the reference's uncertainty.
 """
+from __future__ import annotations
+
 import math
 import multiprocessing
 import threading
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from . import scenes, verdict
+
+if TYPE_CHECKING:
+    import pathlib
+
+    import rebound
+
+#: A row of the report: one run of one config on one case.
+Row = Dict[str, Any]
+#: A job of :func:`run_isolated`: a module-level function and its arguments.
+Job = Tuple[Callable[..., Any], Tuple[Any, ...]]
+#: What became of a job: ("ok", result) | ("error", message) | ("crashed", exit code) | ("killed", seconds).
+Outcome = Tuple[str, Any]
+Vector = Tuple[float, float, float]
 
 FITTINGS = ("phase", "phase-literal", "none")
 STAGES = (2, 4)
@@ -40,18 +56,18 @@ class Case:
 
     name: str
     title: str
-    build: object  # callable() -> rebound.Simulation at t = 0
+    build: Callable[[], rebound.Simulation]  # a new simulation at t = 0
     t_end: float
     time_scale: float  # the shortest dynamical time (period); sets first steps
     reference: str = "ias15"  # or "kepler" (exact two-body) or "radial" (exact infall)
-    fixed_dt: float = None  # fixed steps for pfvi (epsilon = 0) and WHFast
-    whfast_dt: float = None  # default time_scale / 100
+    fixed_dt: Optional[float] = None  # fixed steps for pfvi (epsilon = 0) and WHFast
+    whfast_dt: Optional[float] = None  # default time_scale / 100
     note: str = ""
-    exact: object = None  # callable(t) -> relative position (x, y, z) for exact references
+    exact: Optional[Callable[[float], Vector]] = None  # callable(t) -> relative position (x, y, z) for exact references
     tolerance: verdict.Tolerance = verdict.DEFAULT  # what "accurate" means for this case
 
     @property
-    def whfast_step(self):
+    def whfast_step(self) -> float:
         if self.fixed_dt is not None:
             return self.fixed_dt
         return self.whfast_dt if self.whfast_dt is not None else self.time_scale / 100.0
@@ -275,7 +291,7 @@ def _build_cases():
 _CASES = None
 
 
-def cases():
+def cases() -> Dict[str, Case]:
     """Every case, by name (built once per process: some need G from REBOUND)."""
     global _CASES
     if _CASES is None:
@@ -288,19 +304,20 @@ def cases():
 @dataclass(frozen=True)
 class Config:
     family: str  # pfvi, ias15, whfast
-    fitting: str = None
-    stages: int = None
-    epsilon: float = None
+    fitting: Optional[str] = None
+    stages: Optional[int] = None
+    epsilon: Optional[float] = None
 
     @property
-    def label(self):
+    def label(self) -> str:
         if self.family == "pfvi":
             return f"pfvi {self.fitting} s={self.stages}"
         return self.family.upper() if self.family != "whfast" else "WHFast"
 
 
-def default_configs(integrators=("pfvi", "ias15", "whfast"), fittings=FITTINGS, stages=STAGES,
-                    epsilon=1e-6, ias15_epsilon=1e-9):
+def default_configs(integrators: Sequence[str] = ("pfvi", "ias15", "whfast"), fittings: Sequence[str] = FITTINGS,
+                    stages: Sequence[int] = STAGES, epsilon: float = 1e-6,
+                    ias15_epsilon: float = 1e-9) -> List[Config]:
     configs = []
     for family in integrators:
         if family == "pfvi":
@@ -314,7 +331,7 @@ def default_configs(integrators=("pfvi", "ias15", "whfast"), fittings=FITTINGS, 
     return configs
 
 
-def configure(sim, case, config):
+def configure(sim: rebound.Simulation, case: Case, config: Config) -> None:
     if config.family == "pfvi":
         sim.integrator = "pfvi"
         sim.integrator.fitting = config.fitting
@@ -356,7 +373,7 @@ def _positions(sim):
     return [(p.x, p.y, p.z) for p in sim.particles]
 
 
-def run(case_name, config, budget):
+def run(case_name: str, config: Config, budget: float) -> Row:
     """One run of `config` on a case, within `budget` seconds of integration."""
     case = cases()[case_name]
     row = {"case": case_name, "integrator": config.label, "family": config.family, "fitting": config.fitting,
@@ -406,10 +423,10 @@ def run(case_name, config, budget):
     return row
 
 
-def reference_positions(case_name, t, epsilon=scenes.REFERENCE_EPSILON):
+def reference_positions(case_name: str, t: float, epsilon: float = scenes.REFERENCE_EPSILON) -> Any:
     """Every particle's position at t from IAS15 (or the exact solution, relative to particle 0)."""
     case = cases()[case_name]
-    if case.reference in ("kepler", "radial"):
+    if case.exact is not None:  # the "kepler" and "radial" references
         return case.exact(t)
     sim = case.build()
     sim.integrator = "ias15"
@@ -420,7 +437,7 @@ def reference_positions(case_name, t, epsilon=scenes.REFERENCE_EPSILON):
     return _positions(sim)
 
 
-def position_error(case, row, reference):
+def position_error(case: Case, row: Row, reference: Any) -> float:
     positions = row["positions"]
     if case.reference in ("kepler", "radial"):
         d = [positions[1][k] - positions[0][k] for k in range(3)]
@@ -428,7 +445,7 @@ def position_error(case, row, reference):
     return max(math.dist(p, q) for p, q in zip(positions, reference))
 
 
-def relative_position_error(case, row, reference):
+def relative_position_error(case: Case, row: Row, reference: Any) -> float:
     """The position error the verdict is judged by: relative to each body's
     reference distance from particle 0 (see :mod:`rebound_pfvi.verdict`)."""
     positions = row["positions"]
@@ -438,7 +455,7 @@ def relative_position_error(case, row, reference):
     return verdict.relative_position_error(positions, reference)
 
 
-def judge(case, row):
+def judge(case: Case, row: Row) -> Tuple[str, str]:
     """(verdict, detail) of a row: see :mod:`rebound_pfvi.verdict`."""
     status = row["status"]
     if status == "finished":
@@ -477,14 +494,15 @@ def _child(conn, job):
 
 @dataclass
 class _Slot:
-    process: object
-    conn: object
-    job: tuple
+    process: Any  # multiprocessing's process and connection
+    conn: Any
+    job: Job
     index: int
     deadline: float
 
 
-def run_isolated(jobs, workers=2, hard_limits=None, progress=None):
+def run_isolated(jobs: Sequence[Job], workers: int = 2, hard_limits: Optional[Sequence[float]] = None,
+                 progress: Optional[Callable[[int, Outcome], None]] = None) -> List[Outcome]:
     """Runs each job, a (module-level function, args) pair, in a fresh process,
     at most `workers` at once.
 
@@ -493,9 +511,9 @@ def run_isolated(jobs, workers=2, hard_limits=None, progress=None):
     its hard limit (seconds) has passed.
     """
     ctx = multiprocessing.get_context("spawn")
-    results = [None] * len(jobs)
+    results: List[Outcome] = [("error", "not run")] * len(jobs)  # each replaced when its job ends
     pending = list(range(len(jobs)))
-    running = []
+    running: List[_Slot] = []
     try:
         while pending or running:
             while pending and len(running) < max(1, workers):
@@ -520,7 +538,7 @@ def run_isolated(jobs, workers=2, hard_limits=None, progress=None):
                     outcome = ("crashed", slot.process.exitcode)
                 elif time.monotonic() > slot.deadline:
                     slot.process.kill()
-                    outcome = ("killed", hard_limits[slot.index])
+                    outcome = ("killed", hard_limits[slot.index] if hard_limits else math.inf)
                 if outcome is not None:
                     slot.process.join()
                     slot.conn.close()
@@ -537,12 +555,12 @@ def run_isolated(jobs, workers=2, hard_limits=None, progress=None):
 
 @dataclass
 class Report:
-    rows: list
-    references: dict = field(default_factory=dict)
+    rows: List[Row]
+    references: Dict[str, Any] = field(default_factory=dict)
     budget: float = 0.0
     wall_s: float = 0.0
 
-    def to_dict(self):
+    def to_dict(self) -> Dict[str, Any]:
         return {"budget_s": self.budget, "wall_s": self.wall_s, "rows": self.rows,
                 "references": self.references,
                 "cases": {name: {"title": c.title, "t_end": c.t_end, "reference": c.reference,
@@ -550,7 +568,7 @@ class Report:
                           for name, c in cases().items() if name in self.references}}
 
 
-def what_happened(row):
+def what_happened(row: Row) -> str:
     """The verdict with its detail (else the status), and what pfvi counted on the way."""
     parts = [row["verdict_detail"] if row.get("verdict_detail") else row["status"]]
     if row.get("family") == "pfvi" and "n_steps" in row:
@@ -574,7 +592,9 @@ def _failed_status(outcome):
     return f"error: {detail}"
 
 
-def run_all(case_names=None, configs=None, budget=60.0, workers=2, progress=None):
+def run_all(case_names: Optional[Sequence[str]] = None, configs: Optional[Sequence[Config]] = None,
+            budget: float = 60.0, workers: int = 2,
+            progress: Optional[Callable[[int, Outcome], None]] = None) -> Report:
     """Every case x every config, each run isolated; references first."""
     table = cases()
     names = list(case_names) if case_names else list(table)
@@ -615,6 +635,7 @@ def run_all(case_names=None, configs=None, budget=60.0, workers=2, progress=None
             elif case.reference == "ias15":
                 reference = references[name]["positions"]
             else:
+                assert case.exact is not None, f"case {name}: an exact reference needs exact(t)"
                 reference = case.exact(row["t"])
             row["position_error"] = position_error(case, row, reference)
             row["relative_position_error"] = relative_position_error(case, row, reference)
@@ -634,12 +655,12 @@ def _fmt(x, spec=".2g"):
     return format(x, spec)
 
 
-def verdict_counts(report):
+def verdict_counts(report: Report) -> Dict[str, Dict[str, int]]:
     """{integrator: {verdict: runs}} over every case of the report."""
     return verdict.count(report.rows, "integrator")
 
 
-def markdown(report, command=None):
+def markdown(report: Report, command: Optional[str] = None) -> str:
     """The report as markdown: the verdicts counted per integrator, then one table per case."""
     lines = ["# Stability report: extreme cases", ""]
     if command:
@@ -655,7 +676,7 @@ def markdown(report, command=None):
               "relative energy error at the end and the largest over 100 checkpoints (for the parabola, "
               "relative to |T0| + |V0|); largest position error against the reference at the time reached "
               "(AU; for two-body cases the relative vector); steps; wall time.", ""]
-    by_case = {}
+    by_case: Dict[str, List[Row]] = {}
     for row in report.rows:
         by_case.setdefault(row["case"], []).append(row)
     for name, rows in by_case.items():
@@ -680,7 +701,7 @@ def markdown(report, command=None):
     return "\n".join(lines)
 
 
-def write(report, directory, command=None):
+def write(report: Report, directory: Any, command: Optional[str] = None) -> List[pathlib.Path]:
     """stability.json and stability.md in `directory`; returns their paths."""
     import json
     import pathlib

@@ -112,7 +112,8 @@ def test_ctrl_c_stops_and_keeps_finished_runs(tmp_path, workers):
 
 def test_quick_cli_run_writes_table_data_and_png_with_every_integrator(tmp_path, capsys):
     out = tmp_path / "results"
-    code = main(["compare", "--scene", "kepler", "--e", "0.9", "--periods", "2", "--repeats", "1", "--samples", "4", "--workers", "1",
+    code = main(["compare", "--scene", "kepler", "--e", "0.9", "--periods", "2", "--repeats", "1", "--samples", "4",
+                 "--workers", "1",
                  "--output", str(out)])
     assert code == 0
     data = json.loads((out / "kepler-e0.9.json").read_text())
@@ -170,6 +171,9 @@ def test_main_job_is_the_comet_and_its_page_says_who_is_fastest_and_why(tmp_path
     (["compare", "--scene", "moon"], ["--scene", "kepler"]),
     (["compare", "--periods", "-3"], ["periods", "positive"]),
     (["paper", "fig4"], ["figure", "fig2"]),
+    (["compare", "--a", "2"], ["argument --a: '2' has no unit", 'e.g. "2 AU"']),
+    (["compare", "--scene", "kepler", "--m", "-1 Mjup"], ["m=-1 jupiterMass is negative"]),
+    (["compare", "--mass", "1 Msun"], ["--mass", "not a parameter of scene 'comet'"]),
 ])
 def test_argument_errors_name_the_argument(argv, words, capsys):
     with pytest.raises(SystemExit) as stop:
@@ -178,6 +182,21 @@ def test_argument_errors_name_the_argument(argv, words, capsys):
     err = capsys.readouterr().err
     for word in words:
         assert word in err, (word, err)
+    assert "<Quantity" not in err and "has unit ," not in err
+    # The usage is the subcommand's, whether argparse or the command found the error.
+    assert err.startswith(f"usage: rebound-pfvi {argv[0]} "), err
+
+
+@pytest.mark.parametrize("command, default", [("compare", "rebound-pfvi-results"),
+                                              ("stability", "rebound-pfvi-stability"),
+                                              ("paper", "docs/paper")])
+def test_help_gives_the_default_output_folder(command, default, capsys):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    import re
+
+    out = re.sub(r"-\s+", "-", " ".join(capsys.readouterr().out.split()))  # undo argparse's wrapping
+    assert f"(default: {default}" in out or f"(default {default})" in out, out
 
 
 def test_unit_round_trip_and_one_g():
@@ -349,3 +368,18 @@ def test_figure1_page_links_and_names_the_command_that_ran(tmp_path):
     assert "[docs/adaptive.md](../adaptive.md)" in text
     # Without a command, the page names a call that reruns exactly these options.
     assert "eccentricities=[0.5], epsilons=[0.001], stages=2, step_control='seed'" in text
+
+
+def test_version_names_the_package_and_rebound():
+    import rebound
+
+    import rebound_pfvi
+
+    done = subprocess.run([sys.executable, "-P", "-m", "rebound_pfvi", "--version"], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == (f"rebound-pfvi {rebound_pfvi.__version__} (rebound {rebound.__version__}; C core "
+                           f"compiled against rebound {rebound.__version__})\n")
+    from importlib.metadata import version
+
+    assert rebound_pfvi.__version__ == version("rebound_pfvi")  # the installed distribution's (pyproject)
