@@ -147,6 +147,9 @@ def build_parser() -> argparse.ArgumentParser:
     compare.add_argument("--repeats", type=_positive_int, default=3, help="timed repeats, best kept (default 3)")
     compare.add_argument("--samples", type=_positive_int, default=100,
                          help="times at which the energy error is sampled (default 100)")
+    compare.add_argument("--budget", type=_positive_float, default=None, metavar="SECONDS",
+                         help="wall time per setting (its repeats and the sampled rerun); a run still going then "
+                              "is stopped with the verdict 'over budget' (default: no limit)")
     compare.add_argument("--workers", type=_positive_int, default=None,
                          help="processes of the local pool (default: the number of cores; 1: no pool)")
     compare.add_argument("--scheduler", default=None, metavar="ADDRESS",
@@ -276,7 +279,7 @@ def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv:
     bar = Progress(len(settings))
     try:
         results = compare.run(scene, settings, repeats=args.repeats, samples=args.samples, workers=args.workers,
-                              scheduler=args.scheduler, progress=bar)
+                              scheduler=args.scheduler, progress=bar, budget=args.budget)
     finally:
         bar.close()
     command = invocation(argv)

@@ -171,8 +171,13 @@ def explain_warning(message: str) -> str:
 
 
 def run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repeats: int = 3,
-                samples: int = 100) -> Row:
+                samples: int = 100, budget: Optional[float] = None) -> Row:
     """One row of results for `setting` on `scene` (see the module docstring).
+
+    budget: seconds of wall time for the whole setting (its timed repeats and
+    the sampled rerun); a run still integrating then is stopped from a timer
+    thread (``sim.stop()``, after the step under way) and gets the verdict
+    "over budget". None: no limit.
 
     Warnings raised during the runs (IAS15's "predictor corrector loops did
     not converge" at loose tolerances) are kept in the row's "warnings", not
@@ -181,23 +186,64 @@ def run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repea
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        row = _run_setting(scene, setting, reference, repeats, samples)
+        row = _run_setting(scene, setting, reference, repeats, samples, budget)
     row["warnings"] = sorted({str(w.message) for w in caught})
     return row
 
 
-def _run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repeats: int, samples: int) -> Row:
+class _OverBudget(Exception):
+    """A run stopped by its budget: how far it got, as a fraction of the run."""
+
+
+def _integrate(sim: rebound.Simulation, t: float, exact_finish_time: int, deadline: Optional[float],
+               progress: Callable[[], float]) -> None:
+    """sim.integrate(t), stopped at the deadline (time.perf_counter()) if there is one."""
+    if deadline is None:
+        sim.integrate(t, exact_finish_time=exact_finish_time)
+        return
+    import threading
+
+    remaining = deadline - time.perf_counter()
+    if remaining <= 0.0:
+        raise _OverBudget(progress())
+    stopped = threading.Event()
+
+    def stop() -> None:
+        stopped.set()
+        sim.stop()
+
+    # REBOUND releases the GIL while it integrates, so the timer can stop it mid-run.
+    timer = threading.Timer(remaining, stop)
+    timer.start()
+    try:
+        sim.integrate(t, exact_finish_time=exact_finish_time)
+    finally:
+        timer.cancel()
+    if stopped.is_set():
+        raise _OverBudget(progress())
+
+
+def _run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repeats: int, samples: int,
+                 budget: Optional[float] = None) -> Row:
     row: Row = {"scene": scene.name, "family": setting.family, "line": setting.line, "knob": setting.knob,
            "value": setting.value, "options": dict(setting.options), "status": "ok"}
     t_end = scene.t_end
+    deadline = None if budget is None else time.perf_counter() + budget
+    t0 = 0.0
+
+    def fraction() -> float:
+        return (sim.t - t0) / (t_end - t0)
+
     try:
+        sim = scene.build()
+        t0 = sim.t
         walls = []
         for _ in range(max(1, int(repeats))):
             sim = scene.build()
             configure(sim, scene, setting)
             E0 = scene.energy(sim)
             tick = time.perf_counter()
-            sim.integrate(t_end, exact_finish_time=1)
+            _integrate(sim, t_end, 1, deadline, fraction)
             walls.append(time.perf_counter() - tick)
         row.update(wall_s=min(walls), walls_s=walls, steps=int(sim.steps_done), t_final=float(sim.t),
                    energy_error_final=abs(scene.energy(sim) / E0 - 1.0),
@@ -214,19 +260,20 @@ def _run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repe
         _install_counter(sim, scene, counter)
         configure(sim, scene, setting)
         worst = 0.0
-        t0 = sim.t
         for k in range(1, samples):
-            sim.integrate(t0 + (t_end - t0) * k / samples, exact_finish_time=0)
+            _integrate(sim, t0 + (t_end - t0) * k / samples, 0, deadline, fraction)
             worst = max(worst, abs(scene.energy(sim) / E0 - 1.0))
             if not math.isfinite(worst):
                 break
         else:
-            sim.integrate(t_end, exact_finish_time=1)
+            _integrate(sim, t_end, 1, deadline, fraction)
         worst = max(worst, abs(scene.energy(sim) / E0 - 1.0))
         row.update(energy_error_max=worst, force_evaluations=counter[0])
         values = (row["energy_error_final"], row["position_error"], worst)
         if not all(math.isfinite(v) for v in values):
             row["status"] = "diverged (non-finite energy or position)"
+    except _OverBudget as stopped:
+        row["status"] = f"over budget: stopped by the budget of {budget:g} s at {stopped.args[0]:.3g} of a run"
     except Exception as error:  # noqa: BLE001 - a refused or failed run is a result, recorded with its message
         row["status"] = f"failed: {type(error).__name__}: {error}"
     row["verdict"], row["verdict_detail"] = judge(scene, row)
@@ -244,6 +291,8 @@ def judge(scene: Scene, row: Row) -> Tuple[str, str]:
                              getattr(scene, "tolerance", verdict.DEFAULT))
     if status.startswith("diverged"):
         return verdict.INACCURATE, status
+    if status.startswith("over budget: "):
+        return verdict.OVER_BUDGET, status[len("over budget: "):]
     error = status[len("failed: "):] if status.startswith("failed: ") else status
     kind = verdict.of_exception(error)
     if kind == verdict.REFUSED:
@@ -252,8 +301,8 @@ def judge(scene: Scene, row: Row) -> Tuple[str, str]:
 
 
 def _task(args):
-    index, scene, setting, reference, repeats, samples = args
-    return index, run_setting(scene, setting, reference, repeats, samples)
+    index, scene, setting, reference, repeats, samples, budget = args
+    return index, run_setting(scene, setting, reference, repeats, samples, budget)
 
 
 def _ignore_sigint():
@@ -275,6 +324,7 @@ class Results:
     scheduler: str
     wall_s: float
     interrupted: bool = False
+    budget: Optional[float] = None  # seconds per setting, None: no limit
 
     @property
     def finished(self) -> int:
@@ -297,7 +347,8 @@ class Results:
                           "wall_s": "s"},
                 "reference": {k: v for k, v in self.reference.items() if k in ("how", "uncertainty")},
                 "repeats": self.repeats, "samples": self.samples, "workers": self.workers,
-                "scheduler": self.scheduler, "settings": len(self.settings), "finished": self.finished,
+                "scheduler": self.scheduler, "budget_s": self.budget, "settings": len(self.settings),
+                "finished": self.finished,
                 "interrupted": self.interrupted, "sweep_wall_s": self.wall_s, "rows": self.rows}
 
     def table(self) -> Any:
@@ -327,12 +378,14 @@ class Results:
 
 def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int = 3, samples: int = 100,
         workers: Optional[int] = None, scheduler: Any = None,
-        progress: Optional[ProgressCallback] = None) -> Results:
+        progress: Optional[ProgressCallback] = None, budget: Optional[float] = None) -> Results:
     """Runs a sweep; returns :class:`Results` (rows in the order of `settings`).
 
     workers: processes of the local pool (default: the machine's cores; 1 runs
     here). scheduler: the address of a Dask distributed scheduler, or a
     ``distributed.Client``. progress(done, total, row) is called after each run.
+    budget: seconds of wall time per setting (see :func:`run_setting`; None:
+    no limit).
     Ctrl-C stops the sweep and returns the finished rows with
     ``interrupted=True``.
     """
@@ -345,8 +398,10 @@ def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int
         raise ValueError(f"samples={samples!r} must be at least 1")
     if workers is not None and int(workers) < 1:
         raise ValueError(f"workers={workers!r} must be at least 1")
+    if budget is not None and not (isinstance(budget, (int, float)) and budget > 0 and math.isfinite(budget)):
+        raise ValueError(f"budget={budget!r} must be a positive number of seconds (or None)")
     reference = scene.reference()
-    tasks = [(i, scene, s, reference, int(repeats), int(samples)) for i, s in enumerate(settings)]
+    tasks = [(i, scene, s, reference, int(repeats), int(samples), budget) for i, s in enumerate(settings)]
     done = {}
     interrupted = False
     tick = time.perf_counter()
@@ -373,7 +428,7 @@ def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int
         interrupted = True
     rows = [done[i] for i in sorted(done)]
     return Results(scene, settings, rows, reference, int(repeats), int(samples), workers, where,
-                   time.perf_counter() - tick, interrupted)
+                   time.perf_counter() - tick, interrupted, budget)
 
 
 def _run_pool(tasks, workers, record):

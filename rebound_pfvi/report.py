@@ -188,8 +188,12 @@ def verdict_section(results: Results) -> str:
     from . import verdict
 
     tolerance = getattr(results.scene, "tolerance", verdict.DEFAULT)
-    return ("Each run's verdict: " + "; ".join(f"**{v}**: {verdict.MEANING[v]}" for v in verdict.VERDICTS[:-1])
-            + f". Tolerance: {tolerance.describe()} at t_end. A sweep includes loose settings on purpose, "
+    shown = verdict.VERDICTS if results.budget is not None else verdict.VERDICTS[:-1]
+    budget = (f" Budget: {results.budget:g} s of wall time per setting." if results.budget is not None
+              else " No budget was set (--budget), so no run can be over budget.")
+    return ("Each run's verdict: " + "; ".join(f"**{v}**: {verdict.MEANING[v]}" for v in shown) + "." + budget
+            + " "
+            + f"Tolerance: {tolerance.describe()} at t_end. A sweep includes loose settings on purpose, "
             "so inaccurate runs are expected at its loose end; a refused run is pfvi declining a step it "
             "cannot take (its message is in the table below).\n\n"
             + verdict.markdown_counts(results.verdict_counts()))

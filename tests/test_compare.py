@@ -174,6 +174,7 @@ def test_main_job_is_the_comet_and_its_page_says_who_is_fastest_and_why(tmp_path
     (["compare", "--a", "2"], ["argument --a: '2' has no unit", 'e.g. "2 AU"']),
     (["compare", "--scene", "kepler", "--m", "-1 Mjup"], ["m=-1 jupiterMass is negative"]),
     (["compare", "--mass", "1 Msun"], ["--mass", "not a parameter of scene 'comet'"]),
+    (["compare", "--budget", "0"], ["argument --budget: '0' must be positive"]),
 ])
 def test_argument_errors_name_the_argument(argv, words, capsys):
     with pytest.raises(SystemExit) as stop:

@@ -99,3 +99,27 @@ def test_compare_rows_carry_verdicts():
 ])
 def test_compare_failures_map_to_verdicts(status, expected):
     assert compare.judge(scenes.Kepler(), {"status": status}) == expected
+
+
+def test_compare_budget_stops_a_slow_run_as_over_budget(tmp_path):
+    # pfvi s = 2 at epsilon 1e-11 needs 1.4 s for one run of 100 periods already at e = 0.95
+    # (docs/results), and the setting runs twice (timed, then sampled): a 1.5 s budget stops it inside
+    # integrate(). IAS15 needs 0.1-0.4 s for both runs (measured, on a loaded machine).
+    scene = scenes.Kepler(e=0.99, periods=100)
+    slow = compare.Setting("pfvi", 1e-11, (("stages", 2), ("fitting", "none")))
+    results = compare.run(scene, [slow, compare.Setting("ias15", 1e-9)], repeats=1, samples=4, workers=1,
+                          budget=1.5)
+    stopped, fine = results.rows
+    assert stopped["verdict"] == verdict.OVER_BUDGET
+    assert stopped["verdict_detail"].startswith("stopped by the budget of 1.5 s at ")
+    fraction = float(stopped["verdict_detail"].split(" at ")[1].split()[0])
+    assert 0.0 < fraction < 1.0
+    assert fine["verdict"] == verdict.ACCURATE
+    assert results.verdict_counts()["pfvi s=2 none"][verdict.OVER_BUDGET] == 1
+    from rebound_pfvi import report
+
+    report.write(results, str(tmp_path))
+    page = (tmp_path / "kepler-e0.99.md").read_text()
+    assert "Budget: 1.5 s of wall time per setting." in page and "| over budget |" in page
+    with pytest.raises(ValueError, match="budget=-1"):
+        compare.run(scene, [slow], budget=-1)
