@@ -133,8 +133,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     compare = commands.add_parser(
         "compare", help="error against run time: pfvi, IAS15, WHFast, LEAPFROG, BS on a scene",
-        description="Sweeps every integrator's accuracy knob on a scene and writes <scene>.md (tables), "
-                    ".json, .csv and .png (work-precision diagram) to --output.")
+        description="Sweeps every integrator's accuracy knob on a scene and writes <scene>.md (who is fastest "
+                    "at each accuracy and why, a verdict on every run, the tables), .json, .csv and .png "
+                    "(work-precision diagram) to --output.")
     compare.add_argument("--scene", default="comet", choices=("kepler", "comet", "triple", "oscillator"),
                          help="default comet (Sun, Jupiter and an e = 0.95 comet, 3 comet periods: no "
                               "integrator is exact on it); kepler: two bodies, e = 0.95, 100 periods")
@@ -162,7 +163,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Runs each extreme case (e up to 0.9999, flybys, radial infall, Burrau's problem, a "
                     "close encounter, mass ratios, fixed steps beyond u_max, 1e5 periods, a stiff triple) "
                     "with every integrator, each in its own process with a wall-time budget, and writes "
-                    "stability.md and stability.json to --output.")
+                    "stability.md and stability.json to --output, with a verdict on every run (accurate, "
+                    "inaccurate, refused, crashed, over budget).")
     stability.add_argument("--cases", type=_case_names, default=None,
                            help="comma-separated case names (default: all; --list shows them)")
     stability.add_argument("--list", action="store_true", help="list the cases and exit")
