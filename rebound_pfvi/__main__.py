@@ -238,6 +238,7 @@ class Progress:
 
     def close(self) -> None:
         self._stop.set()
+        self._ticker.join()  # no redraw after the bar is closed
         self.bar.close()
 
 
