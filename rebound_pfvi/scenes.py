@@ -144,12 +144,16 @@ class Scene:
         """Largest distance of a particle from its reference position at t_end."""
         return max(math.dist(p, q) for p, q in zip(_positions(sim), reference["positions"]))
 
-    def relative_position_error(self, sim: rebound.Simulation, reference: Dict[str, Any]) -> float:
+    def relative_position_error(self, sim: rebound.Simulation, reference: Dict[str, Any]) -> Optional[float]:
         """The position error a run's verdict is judged by: each body's error
         relative to particle 0, over its reference distance from particle 0
-        (:func:`rebound_pfvi.verdict.relative_position_error`)."""
+        (:func:`rebound_pfvi.verdict.relative_position_error`). None if the
+        reference has no positions (a scene with its own position_error that
+        does not define this): the verdict then rests on the energy alone."""
         from .verdict import relative_position_error
 
+        if "positions" not in reference:
+            return None
         return relative_position_error(_positions(sim), reference["positions"])
 
     def period_quantity(self) -> Any:
@@ -212,7 +216,7 @@ class Kepler(Scene):
         d = sim.particles[1] - sim.particles[0]
         return math.dist((d.x, d.y, d.z), self.exact_relative_position(sim.t, reference["elements"]))
 
-    def relative_position_error(self, sim: rebound.Simulation, reference: Dict[str, Any]) -> float:
+    def relative_position_error(self, sim: rebound.Simulation, reference: Dict[str, Any]) -> Optional[float]:
         from .verdict import relative_vector_error
 
         d = sim.particles[1] - sim.particles[0]
@@ -376,7 +380,7 @@ class Oscillator(Scene):
         exact = (self.amplitude * math.cos(phase), 0.5 * self.amplitude * math.sin(phase), 0.0)
         return math.dist((p.x, p.y, p.z), exact)
 
-    def relative_position_error(self, sim: rebound.Simulation, reference: Dict[str, Any]) -> float:
+    def relative_position_error(self, sim: rebound.Simulation, reference: Dict[str, Any]) -> Optional[float]:
         from .verdict import relative_vector_error
 
         p = sim.particles[0]

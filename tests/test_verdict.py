@@ -123,3 +123,20 @@ def test_compare_budget_stops_a_slow_run_as_over_budget(tmp_path):
     assert "Budget: 1.5 s of wall time per setting." in page and "| over budget |" in page
     with pytest.raises(ValueError, match="budget=-1"):
         compare.run(scene, [slow], budget=-1)
+
+
+def test_a_scene_without_reference_positions_is_judged_on_energy():
+    # A scene with its own exact reference (no "positions") and no relative_position_error of its own,
+    # as a new scene may be: its runs are judged on the energy, not crashed by a missing key.
+    class Exact(scenes.Kepler):
+        def reference(self):
+            return {"elements": scenes.orbit_elements(self.build()), "uncertainty": 0.0, "how": "exact"}
+
+        def relative_position_error(self, sim, reference):
+            return scenes.Scene.relative_position_error(self, sim, reference)
+
+    scene = Exact(e=0.5, periods=1)
+    row = compare.run_setting(scene, compare.Setting("ias15", 1e-9), scene.reference(), repeats=1, samples=3)
+    assert row["status"] == "ok" and row["relative_position_error"] is None
+    assert row["verdict"] == verdict.ACCURATE and row["verdict_detail"].startswith("energy error ")
+    assert "position" not in row["verdict_detail"]
