@@ -91,7 +91,8 @@ def summary_table(rows: List[Row], floor: float = 0.0, length: str = "AU") -> st
 #: How each family gets to its accuracy: the reason behind its cost per unit of accuracy.
 HOW = {
     "pfvi": "pfvi is implicit: each step solves its stage equations by iteration (several force evaluations per "
-            "stage), with adaptive steps from osculating circles; s = 2 is of order 2, s = 4 of order 6",
+            "stage), with adaptive steps from osculating circles; it is of order 2s - 2 (s = 2: 2, s = 4: 6, "
+            "s = 6: 10)",
     "ias15": "IAS15 is a 15th-order adaptive predictor-corrector: long steps, each of several force evaluations",
     "bs": "BS (Gragg-Bulirsch-Stoer) extrapolates to high order with adaptive steps",
     "whfast": "WHFast takes fixed steps of an exact Kepler drift and interaction kicks (second order); its "
