@@ -18,7 +18,7 @@ from rebound_pfvi import compare, report, scenes
 def main():
     # A Jupiter-mass planet on an e = 0.9 orbit at 2 AU around a 0.8 Msun star.
     scene = scenes.Kepler(e=0.9, a=2 * u.AU, mass=0.8 * u.Msun, m=1 * u.Mjup, periods=20)
-    print(scene.describe(), "- period", scene.period_quantity().to(u.day))
+    print(f"{scene.describe()} - period {scene.period_quantity().to(u.day):.1f}")
 
     # The default sweep, or pick settings yourself, e.g.
     #   compare.Setting("pfvi", 1e-8, (("stages", 6), ("fitting", "none")))
@@ -28,7 +28,11 @@ def main():
     results = compare.run(scene, settings, repeats=3)  # a local process pool; Ctrl-C keeps finished runs
     table = results.table()  # astropy QTable: wall_time in s, position_error in AU (and km)
     table.sort("wall_time")
-    print(table["line", "knob", "value", "steps", "wall_time", "energy_error_max", "position_error_km"])
+    shown = table["line", "knob", "value", "steps", "wall_time", "energy_error_max", "position_error_km"]
+    for name, spec in (("value", ".0e"), ("wall_time", ".3g"), ("energy_error_max", ".1e"),
+                       ("position_error_km", ".2e")):
+        shown[name].info.format = spec
+    shown.pprint(max_lines=-1, max_width=-1)  # every row and column: nothing hidden behind "..."
 
     paths = report.write(results, "compare-example", command="python3 examples/compare_eccentric.py")
     print("wrote", ", ".join(paths.values()))

@@ -6,9 +6,11 @@ scene), ``stability`` (stiff and extreme cases), ``paper fig1|fig2|fig3``
 (astropy, matplotlib, dask) happen only in the command that needs them.
 """
 import argparse
+import os
 import shlex
 import sys
-import time
+import threading
+from typing import Any, Dict, List, Optional, TextIO
 
 # Scene parameters: option -> (scene keyword, kind of quantity, scenes that take it, help).
 SCENE_OPTIONS = {
@@ -97,19 +99,46 @@ def _stability_families(text):
     return names
 
 
-def build_parser():
+def version_text() -> str:
+    """The package's version, the running rebound's, and the one the C core was compiled against."""
+    import rebound
+
+    import rebound_pfvi
+    from rebound_pfvi._core import lib
+
+    compiled = lib.pfvi_rebound_version_compiled().decode()
+    return (f"rebound-pfvi {rebound_pfvi.__version__} (rebound {rebound.__version__}; C core compiled against "
+            f"rebound {compiled})")
+
+
+class _Version(argparse.Action):
+    """--version, computed when asked for: importing rebound_pfvi loads the C core."""
+
+    def __init__(self, option_strings: List[str], dest: str = argparse.SUPPRESS, **kwargs: Any) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any,
+                 option_string: Optional[str] = None) -> None:
+        print(version_text())
+        parser.exit()
+
+
+def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="rebound-pfvi",
                                      description="Phase-fitted discrete Lagrangian integrator for REBOUND.")
+    parser.add_argument("--version", action=_Version, help="print the versions of rebound-pfvi and rebound, and exit")
     commands = parser.add_subparsers(dest="command")
     demo = commands.add_parser("demo", help="circular and e = 0.95 orbits with pfvi, IAS15 and WHFast (default)")
     demo.add_argument("--orbits", type=_positive_int, default=100, help="orbits to integrate (default 100)")
 
     compare = commands.add_parser(
         "compare", help="error against run time: pfvi, IAS15, WHFast, LEAPFROG, BS on a scene",
-        description="Sweeps every integrator's accuracy knob on a scene and writes <scene>.md (tables), "
-                    ".json, .csv and .png (work-precision diagram) to --output.")
-    compare.add_argument("--scene", default="kepler", choices=("kepler", "comet", "triple", "oscillator"),
-                         help="default kepler (e = 0.95, 100 periods)")
+        description="Sweeps every integrator's accuracy knob on a scene and writes <scene>.md (who is fastest "
+                    "at each accuracy and why, a verdict on every run, the tables), .json, .csv and .png "
+                    "(work-precision diagram) to --output.")
+    compare.add_argument("--scene", default="comet", choices=("kepler", "comet", "triple", "oscillator"),
+                         help="default comet (Sun, Jupiter and an e = 0.95 comet, 3 comet periods: no "
+                              "integrator is exact on it); kepler: two bodies, e = 0.95, 100 periods")
     for option, (_, kind, scenes, text) in SCENE_OPTIONS.items():
         compare.add_argument(option, type=_number(kind) if kind == "number" else _quantity(kind), default=None,
                              help=f"{text} [{', '.join(scenes)}]")
@@ -119,18 +148,23 @@ def build_parser():
     compare.add_argument("--repeats", type=_positive_int, default=3, help="timed repeats, best kept (default 3)")
     compare.add_argument("--samples", type=_positive_int, default=100,
                          help="times at which the energy error is sampled (default 100)")
+    compare.add_argument("--budget", type=_positive_float, default=None, metavar="SECONDS",
+                         help="wall time per setting (its repeats and the sampled rerun); a run still going then "
+                              "is stopped with the verdict 'over budget' (default: no limit)")
     compare.add_argument("--workers", type=_positive_int, default=None,
                          help="processes of the local pool (default: the number of cores; 1: no pool)")
     compare.add_argument("--scheduler", default=None, metavar="ADDRESS",
                          help="send the runs to this Dask distributed scheduler (needs the [dask] extra)")
-    compare.add_argument("--output", default="rebound-pfvi-results", help="folder for the results")
+    compare.add_argument("--output", default="rebound-pfvi-results",
+                         help="folder for the results (default: %(default)s, in the current folder)")
 
     stability = commands.add_parser(
         "stability", help="stiff and extreme cases: pfvi (every fitting, s = 2 and 4) beside IAS15 and WHFast",
         description="Runs each extreme case (e up to 0.9999, flybys, radial infall, Burrau's problem, a "
                     "close encounter, mass ratios, fixed steps beyond u_max, 1e5 periods, a stiff triple) "
                     "with every integrator, each in its own process with a wall-time budget, and writes "
-                    "stability.md and stability.json to --output.")
+                    "stability.md and stability.json to --output, with a verdict on every run (accurate, "
+                    "inaccurate, refused, crashed, over budget).")
     stability.add_argument("--cases", type=_case_names, default=None,
                            help="comma-separated case names (default: all; --list shows them)")
     stability.add_argument("--list", action="store_true", help="list the cases and exit")
@@ -141,9 +175,13 @@ def build_parser():
     stability.add_argument("--budget", type=_positive_float, default=60.0,
                            help="seconds of integration per run before it is stopped (default 60)")
     stability.add_argument("--workers", type=_positive_int, default=2, help="runs at once (default 2)")
-    stability.add_argument("--output", default="rebound-pfvi-stability", help="folder for the report")
+    stability.add_argument("--output", default="rebound-pfvi-stability",
+                           help="folder for the report (default: %(default)s, in the current folder)")
 
     paper = commands.add_parser("paper", help="rerun a figure of the seed paper")
+    # Errors found after parsing are reported by the subcommand's parser, with its usage.
+    for sub in (demo, compare, stability, paper):
+        sub.set_defaults(subparser=sub)
     paper.add_argument("figure", choices=("fig1", "fig2", "fig3"),
                        help="fig1: steps against energy error, phase vs none; fig2: energy and position error "
                             "over 1e5 periods at e = 0.95; fig3: the curvature frequency over 10 periods")
@@ -160,32 +198,58 @@ def build_parser():
 
 
 class Progress:
-    """A one-line progress bar on stderr (a line per run when not a terminal)."""
+    """A progress bar with the elapsed time and the time left (tqdm), on stderr.
 
-    def __init__(self, stream=None):
-        self.stream = stream or sys.stderr
-        self.tty = self.stream.isatty()
-        self.start = time.perf_counter()
+    It shows what finished last and how many runs did not finish, never a
+    run's message: the command lists those in full at the end. tqdm is
+    imported here, when a long command starts, not with the package."""
 
-    def __call__(self, done, total, row=None):
-        elapsed = time.perf_counter() - self.start
-        what = ""
+    def __init__(self, total: int, unit: str = "run", stream: Optional[TextIO] = None) -> None:
+        from tqdm import tqdm
+
+        self.bar = tqdm(total=total, unit=unit, file=stream or sys.stderr, dynamic_ncols=True, mininterval=0.5,
+                        smoothing=0.1, bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}<{remaining}{postfix}]")
+        self.not_finished = 0
+        # Redraw every second, so that the elapsed time moves while a long run is under way.
+        self._stop = threading.Event()
+        self._ticker = threading.Thread(target=self._tick, daemon=True)
+        self._ticker.start()
+
+    def _tick(self) -> None:
+        while not self._stop.wait(1.0):
+            self.bar.refresh()
+
+    def __call__(self, done: int, total: int, row: Optional[Dict[str, Any]] = None) -> None:
+        """compare's and paper's callback: `done` of `total` finished, `row` the last one."""
         if row is not None:
-            what = f"{row['line']} {row['knob']}={row['value']:g}"
-            if row["status"] != "ok":
-                what += f" [{row['status'][:60]}]"
-        if self.tty:
-            width = 30
-            bar = "#" * (width * done // total) + "." * (width - width * done // total)
-            self.stream.write(f"\r[{bar}] {done}/{total} {elapsed:5.0f} s  {what[:50]:<50}")
-            if done == total:
-                self.stream.write("\n")
-        else:
-            self.stream.write(f"[{done}/{total}] {elapsed:.0f} s {what}\n")
-        self.stream.flush()
+            self.finished_one(f"{row['line']} {row['knob']}={row['value']:g}",
+                              row.get("verdict") in ("refused", "crashed", "over budget"))
+        self.bar.update(done - self.bar.n)
+        if done >= total:
+            self.close()
+
+    def finished_one(self, what: str, failed: bool) -> None:
+        """Names the run that finished last; counts it if it did not finish."""
+        self.not_finished += bool(failed)
+        postfix = f"last: {what}"
+        if self.not_finished:
+            postfix += f"; not finished: {self.not_finished} (listed at the end)"
+        self.bar.set_postfix_str(postfix, refresh=False)
+
+    def close(self) -> None:
+        self._stop.set()
+        self._ticker.join()  # no redraw after the bar is closed
+        self.bar.close()
 
 
-def _scene_from_args(parser, args):
+def invocation(argv: List[str]) -> str:
+    """The command as it was run, for the pages it writes: the installed
+    ``rebound-pfvi`` script or ``python3 -P -m rebound_pfvi``, and the arguments."""
+    program = "rebound-pfvi" if os.path.basename(sys.argv[0]) == "rebound-pfvi" else "python3 -P -m rebound_pfvi"
+    return " ".join([program] + [shlex.quote(a) for a in argv])
+
+
+def _scene_from_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
     from . import scenes
 
     params = {}
@@ -203,7 +267,7 @@ def _scene_from_args(parser, args):
         parser.error(f"scene {args.scene}: {error}")
 
 
-def run_compare(parser, args, argv):
+def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv: List[str]) -> int:
     from . import compare, report
 
     scene = _scene_from_args(parser, args)
@@ -215,55 +279,80 @@ def run_compare(parser, args, argv):
         parser.error(f"argument --integrators: none of {', '.join(args.integrators)} applies to scene "
                      f"{scene.name!r} (it takes: {', '.join(scene.families)})")
     print(f"{scene.describe()}: {len(settings)} runs, best of {args.repeats}", flush=True)
-    results = compare.run(scene, settings, repeats=args.repeats, samples=args.samples, workers=args.workers,
-                          scheduler=args.scheduler, progress=Progress())
-    command = "rebound-pfvi " + " ".join(shlex.quote(a) for a in argv)
+    bar = Progress(len(settings))
+    try:
+        results = compare.run(scene, settings, repeats=args.repeats, samples=args.samples, workers=args.workers,
+                              scheduler=args.scheduler, progress=bar, budget=args.budget)
+    finally:
+        bar.close()
+    command = invocation(argv)
     paths = report.write(results, args.output, command=command)
     if results.interrupted:
         print(f"\nInterrupted: {results.finished} of {len(settings)} runs finished and kept.", file=sys.stderr)
     print(f"Wrote {', '.join(paths.values())} ({results.wall_s:.1f} s)")
-    best = report.fastest(results.rows, 1e-6)
-    if best:
-        winner = min(best, key=lambda n: best[n]["wall_s"])
-        print(f"Fastest to a position error of 1e-6 AU: {winner} ({best[winner]['wall_s']:.3g} s)")
+    _print_verdicts(results.verdict_counts(), results.rows, "line")
+    warned = [r for r in results.rows if r.get("warnings")]
+    if warned:
+        print(f"REBOUND warned in {len(warned)} run(s), explained in the page's Warnings section:")
+        print(report.warnings_section(warned))
+    print("Fastest to a position error (wall time, best of the sweep):")
+    length = report.length_unit(results)
+    for sentence in report.conclusions(results, results.reference.get("uncertainty", 0.0), length):
+        print("- " + sentence)
+    caveat = report.whfast_caveat(results)
+    if caveat:
+        print(caveat.replace("**", "").replace("`", ""))
     return 130 if results.interrupted else 0
 
 
-def run_paper(args):
+def run_paper(args: argparse.Namespace, argv: List[str]) -> int:
     from . import paper as seed_paper
 
     if args.figure == "fig1":
-        seed_paper.figure1(args.output, stages=args.stages or 2, step_control=args.step_control or "seed",
-                           progress=lambda row: print(
-                               f"e = {row['e']}, epsilon = {row['epsilon']:.0e}: phase {row['phase_steps']} steps,"
-                               f" none {row['none_steps']} steps", flush=True))
-        return 0
-    stages, control = args.stages or 4, args.step_control or "reversible"
-    if args.figure == "fig2":
-        progress = Progress()
-        periods = args.periods or 1e5
-        command = (f"python3 -P -m rebound_pfvi paper fig2 --output {args.output} --periods {periods:g} "
-                   f"--samples {args.samples} --stages {stages} --epsilon {args.epsilon:g} --step-control {control}")
+        stages, control = args.stages or 2, args.step_control or "seed"
+        bar = Progress(len(seed_paper.ECCENTRICITIES) * len(seed_paper.EPSILONS), unit="tolerance")
+
+        def progress(row):
+            bar.finished_one(f"e = {row['e']}, epsilon = {row['epsilon']:.0e}: phase {row['phase_steps']} steps, "
+                             f"none {row['none_steps']} steps", False)
+            bar.bar.update(1)
+
+        command = invocation(argv)
         try:
-            rows, wall = seed_paper.figure2(args.output, periods=periods, samples=args.samples, stages=stages,
-                                            epsilon=args.epsilon, step_control=control,
-                                            progress=lambda k, n: progress(k, n) if k % max(1, n // 200) == 0
-                                            or k == n else None, command=command)
+            rows = seed_paper.figure1(args.output, stages=stages, step_control=control, progress=progress,
+                                      command=command)
         except KeyboardInterrupt:
             print("\nInterrupted: nothing written.", file=sys.stderr)
             return 130
+        finally:
+            bar.close()
+        print(f"Figure 1: {len(rows)} tolerances; wrote {args.output}/figure1.md, .png, .json")
+        return 0
+    stages, control = args.stages or 4, args.step_control or "reversible"
+    if args.figure == "fig2":
+        samples_bar = Progress(args.samples, unit="sample")
+        periods = args.periods or 1e5
+        command = invocation(argv)
+        try:
+            rows, wall = seed_paper.figure2(args.output, periods=periods, samples=args.samples, stages=stages,
+                                            epsilon=args.epsilon, step_control=control,
+                                            progress=samples_bar, command=command)
+        except KeyboardInterrupt:
+            print("\nInterrupted: nothing written.", file=sys.stderr)
+            return 130
+        finally:
+            samples_bar.close()
         print(f"Figure 2: {rows[-1]['steps']} steps, run time {wall:.1f} s; wrote {args.output}/figure2.md, .png, .json")
         return 0
     periods = args.periods or 10
-    command = (f"python3 -P -m rebound_pfvi paper fig3 --output {args.output} --periods {periods:g} "
-               f"--stages {stages} --epsilon {args.epsilon:g} --step-control {control}")
+    command = invocation(argv)
     rows, wall = seed_paper.figure3(args.output, periods=periods, stages=stages, epsilon=args.epsilon,
                                     step_control=control, command=command)
     print(f"Figure 3: {len(rows)} steps, run time {wall:.1f} s; wrote {args.output}/figure3.md, .png, .json")
     return 0
 
 
-def run_stability(args, argv):
+def run_stability(args: argparse.Namespace, argv: List[str]) -> int:
     from . import stability
 
     if args.list:
@@ -275,37 +364,53 @@ def run_stability(args, argv):
     total = len(names) * len(configs)
     print(f"{len(names)} cases x {len(configs)} integrators = {total} runs, {args.workers} at once, "
           f"budget {args.budget:g} s each", flush=True)
-    bar = Progress()
-    done = [0]
+    bar = Progress(total)
+    jobs = [(name, config.label) for name in names for config in configs]
 
     def progress(index, outcome):
-        done[0] += 1
-        row = outcome[1] if outcome[0] == "ok" else None
-        what = f"{row['case']}: {row['integrator']} {row['status'][:40]}" if row else f"[{outcome[0]}]"
-        bar.stream.write(f"[{done[0]}/{total}] {time.perf_counter() - bar.start:.0f} s {what}\n")
-        bar.stream.flush()
+        name, label = jobs[index]
+        failed = outcome[0] != "ok" or not outcome[1]["status"].startswith("finished")
+        bar.finished_one(f"{name}: {label}", failed)
+        bar.bar.update(1)
 
     try:
         report = stability.run_all(names, configs, budget=args.budget, workers=args.workers, progress=progress)
     except KeyboardInterrupt:
         print("\nInterrupted: nothing written.", file=sys.stderr)
         return 130
-    command = "rebound-pfvi " + " ".join(shlex.quote(a) for a in argv)
+    finally:
+        bar.close()
+    command = invocation(argv)
     paths = stability.write(report, args.output, command=command)
-    bad = [r for r in report.rows if r["status"] != "finished"]
-    print(f"Wrote {', '.join(map(str, paths))} ({report.wall_s:.0f} s); {len(report.rows) - len(bad)} runs "
-          f"finished, {len(bad)} refused, stopped or failed (see what_happened)")
+    print(f"Wrote {', '.join(map(str, paths))} ({report.wall_s:.0f} s)")
+    _print_verdicts(stability.verdict_counts(report), report.rows, "integrator")
     return 0
 
 
-def main(argv=None):
+def _print_verdicts(counts: Dict[str, Dict[str, int]], rows: List[Dict[str, Any]], key: str) -> None:
+    """The verdicts counted per integrator, then every run that did not finish, with its whole message."""
+    from .verdict import ACCURATE, INACCURATE, text_counts
+
+    print("Verdicts (accurate: finished within the tolerance; see the report):")
+    for line in text_counts(counts):
+        print("  " + line)
+    failed = [r for r in rows if r["verdict"] not in (ACCURATE, INACCURATE)]
+    if failed:
+        print(f"{len(failed)} run(s) did not finish:")
+        for r in failed:
+            where = f"{r['case']}: " if "case" in r else ""
+            knob = f" {r['knob']}={r['value']:g}" if "knob" in r else ""
+            print(f"- {where}{r[key]}{knob}: {r['verdict']}: {r['verdict_detail']}")
+
+
+def main(argv: Optional[List[str]] = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command == "compare":
-        return run_compare(parser, args, argv)
+        return run_compare(args.subparser, args, argv)
     if args.command == "paper":
-        return run_paper(args)
+        return run_paper(args, argv)
     if args.command == "stability":
         return run_stability(args, argv)
     from .demo import run_demo

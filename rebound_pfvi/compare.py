@@ -11,7 +11,9 @@ Each setting is run by :func:`run_setting`, which
 2. runs once more, untimed, stopping at ``samples`` evenly spaced times
    without changing the steps (``exact_finish_time=0``) to find the largest
    relative energy error, with a callback in ``additional_forces`` that adds
-   nothing and counts force evaluations.
+   nothing and counts force evaluations;
+3. gives the run its verdict (:mod:`rebound_pfvi.verdict`: accurate,
+   inaccurate, refused, crashed) against the scene's tolerance.
 
 :func:`run` sends the settings to a local process pool (default), to a Dask
 ``distributed`` scheduler (``scheduler="tcp://..."``), or runs them in this
@@ -21,11 +23,24 @@ compare wall times within one sweep, not across machines or sweeps.
 Everything here is unitless (AU, yr, Msun); :class:`Results` converts to
 astropy Quantities at the boundary.
 """
+from __future__ import annotations
+
 import math
 import os
 import signal
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
+
+if TYPE_CHECKING:
+    import rebound
+
+    from .scenes import Scene
+
+#: A row of results: one run of one setting (see :func:`run_setting`).
+Row = Dict[str, Any]
+#: progress(done, total, row), called after each run.
+ProgressCallback = Callable[[int, int, Row], None]
 
 FAMILIES = ("pfvi", "ias15", "whfast", "leapfrog", "bs")
 #: The accuracy knob of each family, as the table and plot call it.
@@ -39,10 +54,10 @@ class Setting:
 
     family: str
     value: float
-    options: tuple = ()  # (name, value) pairs, e.g. (("stages", 4), ("fitting", "phase"))
+    options: Tuple[Tuple[str, Any], ...] = ()  # (name, value) pairs, e.g. (("stages", 4), ("fitting", "phase"))
     line: str = field(default="", compare=False)  # plot line and table group
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.family not in FAMILIES:
             raise ValueError(f"family={self.family!r} is not an integrator family; allowed: {', '.join(FAMILIES)}")
         if not (isinstance(self.value, (int, float)) and self.value > 0 and math.isfinite(self.value)):
@@ -60,7 +75,7 @@ class Setting:
             object.__setattr__(self, "line", label)
 
     @property
-    def knob(self):
+    def knob(self) -> str:
         return KNOBS[self.family]
 
 
@@ -73,7 +88,8 @@ BS_EPS = {"quick": (1e-4, 1e-7, 1e-10, 1e-13), "full": tuple(10.0 ** -k for k in
 FIXED_STEPS = {"quick": (100, 1000, 10000), "full": (30, 100, 300, 1000, 3000, 10000, 30000)}
 
 
-def default_settings(scene, size="quick", families=None):
+def default_settings(scene: Scene, size: str = "quick",
+                     families: Optional[Sequence[str]] = None) -> List[Setting]:
     """The sweep for `scene`: pfvi stages x fitting x epsilon (and the scene's
     frequency options), IAS15 epsilon, BS tolerance, WHFast and LEAPFROG steps
     per period. `families` restricts it."""
@@ -105,7 +121,7 @@ def default_settings(scene, size="quick", families=None):
     return settings
 
 
-def configure(sim, scene, setting):
+def configure(sim: rebound.Simulation, scene: Scene, setting: Setting) -> None:
     """Sets the integrator of `sim` as `setting` asks."""
     opts = dict(setting.options)
     if setting.family == "pfvi":
@@ -130,7 +146,7 @@ def configure(sim, scene, setting):
         sim.dt = scene.period / setting.value
 
 
-def _install_counter(sim, scene, counter):
+def _install_counter(sim: rebound.Simulation, scene: Scene, counter: List[int]) -> None:
     if not scene.counts_own_forces:
         def count(simp):
             counter[0] += 1
@@ -138,23 +154,101 @@ def _install_counter(sim, scene, counter):
         sim.additional_forces = count
 
 
-def run_setting(scene, setting, reference, repeats=3, samples=100):
-    """One row of results for `setting` on `scene` (see the module docstring)."""
-    row = {"scene": scene.name, "family": setting.family, "line": setting.line, "knob": setting.knob,
+#: What REBOUND's warnings mean for a row, for the page and the command line.
+WARNING_MEANINGS = {
+    "predictor corrector loops in IAS15 did not converge":
+        "IAS15's predictor-corrector iteration hit its limit in 10 or more steps, REBOUND's sign that the "
+        "steps are too long for the tolerance; the run went on, and its error is measured like any other",
+}
+
+
+def explain_warning(message: str) -> str:
+    """A REBOUND warning in the words of :data:`WARNING_MEANINGS` (else the message itself)."""
+    for key, meaning in WARNING_MEANINGS.items():
+        if key in message:
+            return meaning
+    return message
+
+
+def run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repeats: int = 3,
+                samples: int = 100, budget: Optional[float] = None) -> Row:
+    """One row of results for `setting` on `scene` (see the module docstring).
+
+    budget: seconds of wall time for the whole setting (its timed repeats and
+    the sampled rerun); a run still integrating then is stopped from a timer
+    thread (``sim.stop()``, after the step under way) and gets the verdict
+    "over budget". None: no limit.
+
+    Warnings raised during the runs (IAS15's "predictor corrector loops did
+    not converge" at loose tolerances) are kept in the row's "warnings", not
+    printed from the worker process."""
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        row = _run_setting(scene, setting, reference, repeats, samples, budget)
+    row["warnings"] = sorted({str(w.message) for w in caught})
+    return row
+
+
+class _OverBudget(Exception):
+    """A run stopped by its budget: how far it got, as a fraction of the run."""
+
+
+def _integrate(sim: rebound.Simulation, t: float, exact_finish_time: int, deadline: Optional[float],
+               progress: Callable[[], float]) -> None:
+    """sim.integrate(t), stopped at the deadline (time.perf_counter()) if there is one."""
+    if deadline is None:
+        sim.integrate(t, exact_finish_time=exact_finish_time)
+        return
+    import threading
+
+    remaining = deadline - time.perf_counter()
+    if remaining <= 0.0:
+        raise _OverBudget(progress())
+    stopped = threading.Event()
+
+    def stop() -> None:
+        stopped.set()
+        sim.stop()
+
+    # REBOUND releases the GIL while it integrates, so the timer can stop it mid-run.
+    timer = threading.Timer(remaining, stop)
+    timer.start()
+    try:
+        sim.integrate(t, exact_finish_time=exact_finish_time)
+    finally:
+        timer.cancel()
+    if stopped.is_set():
+        raise _OverBudget(progress())
+
+
+def _run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repeats: int, samples: int,
+                 budget: Optional[float] = None) -> Row:
+    row: Row = {"scene": scene.name, "family": setting.family, "line": setting.line, "knob": setting.knob,
            "value": setting.value, "options": dict(setting.options), "status": "ok"}
     t_end = scene.t_end
+    deadline = None if budget is None else time.perf_counter() + budget
+    t0 = 0.0
+
+    def fraction() -> float:
+        return (sim.t - t0) / (t_end - t0)
+
     try:
+        sim = scene.build()
+        t0 = sim.t
         walls = []
         for _ in range(max(1, int(repeats))):
             sim = scene.build()
             configure(sim, scene, setting)
             E0 = scene.energy(sim)
             tick = time.perf_counter()
-            sim.integrate(t_end, exact_finish_time=1)
+            _integrate(sim, t_end, 1, deadline, fraction)
             walls.append(time.perf_counter() - tick)
         row.update(wall_s=min(walls), walls_s=walls, steps=int(sim.steps_done), t_final=float(sim.t),
                    energy_error_final=abs(scene.energy(sim) / E0 - 1.0),
-                   position_error=scene.position_error(sim, reference))
+                   position_error=scene.position_error(sim, reference),
+                   relative_position_error=scene.relative_position_error(sim, reference))
         if setting.family == "pfvi":
             row.update(pfvi_force_evaluations=int(sim.integrator.n_force_evaluations),
                        attempts_per_step=int(sim.integrator.n_attempts) / max(1, int(sim.integrator.n_steps)),
@@ -166,27 +260,49 @@ def run_setting(scene, setting, reference, repeats=3, samples=100):
         _install_counter(sim, scene, counter)
         configure(sim, scene, setting)
         worst = 0.0
-        t0 = sim.t
         for k in range(1, samples):
-            sim.integrate(t0 + (t_end - t0) * k / samples, exact_finish_time=0)
+            _integrate(sim, t0 + (t_end - t0) * k / samples, 0, deadline, fraction)
             worst = max(worst, abs(scene.energy(sim) / E0 - 1.0))
             if not math.isfinite(worst):
                 break
         else:
-            sim.integrate(t_end, exact_finish_time=1)
+            _integrate(sim, t_end, 1, deadline, fraction)
         worst = max(worst, abs(scene.energy(sim) / E0 - 1.0))
         row.update(energy_error_max=worst, force_evaluations=counter[0])
         values = (row["energy_error_final"], row["position_error"], worst)
         if not all(math.isfinite(v) for v in values):
             row["status"] = "diverged (non-finite energy or position)"
+    except _OverBudget as stopped:
+        row["status"] = f"over budget: stopped by the budget of {budget:g} s at {stopped.args[0]:.3g} of a run"
     except Exception as error:  # noqa: BLE001 - a refused or failed run is a result, recorded with its message
         row["status"] = f"failed: {type(error).__name__}: {error}"
+    row["verdict"], row["verdict_detail"] = judge(scene, row)
     return row
 
 
+def judge(scene: Scene, row: Row) -> Tuple[str, str]:
+    """(verdict, detail) of a row (:mod:`rebound_pfvi.verdict`), against the
+    scene's ``tolerance`` if it has one, else the default."""
+    from . import verdict
+
+    status = row["status"]
+    if status == "ok":
+        return verdict.judge(row["energy_error_max"], row.get("relative_position_error"),
+                             getattr(scene, "tolerance", verdict.DEFAULT))
+    if status.startswith("diverged"):
+        return verdict.INACCURATE, status
+    if status.startswith("over budget: "):
+        return verdict.OVER_BUDGET, status[len("over budget: "):]
+    error = status[len("failed: "):] if status.startswith("failed: ") else status
+    kind = verdict.of_exception(error)
+    if kind == verdict.REFUSED:
+        return kind, error[len("RuntimeError: "):]
+    return kind, error
+
+
 def _task(args):
-    index, scene, setting, reference, repeats, samples = args
-    return index, run_setting(scene, setting, reference, repeats, samples)
+    index, scene, setting, reference, repeats, samples, budget = args
+    return index, run_setting(scene, setting, reference, repeats, samples, budget)
 
 
 def _ignore_sigint():
@@ -198,22 +314,29 @@ def _ignore_sigint():
 class Results:
     """The rows of a sweep and what is needed to read them."""
 
-    scene: object
-    settings: list
-    rows: list
-    reference: dict
+    scene: Scene
+    settings: List[Setting]
+    rows: List[Row]
+    reference: Dict[str, Any]
     repeats: int
     samples: int
     workers: int
     scheduler: str
     wall_s: float
     interrupted: bool = False
+    budget: Optional[float] = None  # seconds per setting, None: no limit
 
     @property
-    def finished(self):
+    def finished(self) -> int:
         return len(self.rows)
 
-    def to_dict(self):
+    def verdict_counts(self) -> Dict[str, Dict[str, int]]:
+        """{line: {verdict: runs}} (a line is an integrator with its options, e.g. "pfvi s=4 phase")."""
+        from .verdict import count
+
+        return count(self.rows, "line")
+
+    def to_dict(self) -> Dict[str, Any]:
         from .units import REBOUND_UNITS
 
         own = getattr(self.scene, "unit_names", True) is None
@@ -224,10 +347,11 @@ class Results:
                           "wall_s": "s"},
                 "reference": {k: v for k, v in self.reference.items() if k in ("how", "uncertainty")},
                 "repeats": self.repeats, "samples": self.samples, "workers": self.workers,
-                "scheduler": self.scheduler, "settings": len(self.settings), "finished": self.finished,
+                "scheduler": self.scheduler, "budget_s": self.budget, "settings": len(self.settings),
+                "finished": self.finished,
                 "interrupted": self.interrupted, "sweep_wall_s": self.wall_s, "rows": self.rows}
 
-    def table(self):
+    def table(self) -> Any:
         """The rows as an astropy QTable, with Quantities: position error in AU
         and km, wall time in s, the knob's step in yr for fixed-step runs."""
         import astropy.units as u
@@ -252,12 +376,16 @@ class Results:
         return t
 
 
-def run(scene, settings=None, repeats=3, samples=100, workers=None, scheduler=None, progress=None):
+def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int = 3, samples: int = 100,
+        workers: Optional[int] = None, scheduler: Any = None,
+        progress: Optional[ProgressCallback] = None, budget: Optional[float] = None) -> Results:
     """Runs a sweep; returns :class:`Results` (rows in the order of `settings`).
 
     workers: processes of the local pool (default: the machine's cores; 1 runs
     here). scheduler: the address of a Dask distributed scheduler, or a
     ``distributed.Client``. progress(done, total, row) is called after each run.
+    budget: seconds of wall time per setting (see :func:`run_setting`; None:
+    no limit).
     Ctrl-C stops the sweep and returns the finished rows with
     ``interrupted=True``.
     """
@@ -270,8 +398,10 @@ def run(scene, settings=None, repeats=3, samples=100, workers=None, scheduler=No
         raise ValueError(f"samples={samples!r} must be at least 1")
     if workers is not None and int(workers) < 1:
         raise ValueError(f"workers={workers!r} must be at least 1")
+    if budget is not None and not (isinstance(budget, (int, float)) and budget > 0 and math.isfinite(budget)):
+        raise ValueError(f"budget={budget!r} must be a positive number of seconds (or None)")
     reference = scene.reference()
-    tasks = [(i, scene, s, reference, int(repeats), int(samples)) for i, s in enumerate(settings)]
+    tasks = [(i, scene, s, reference, int(repeats), int(samples), budget) for i, s in enumerate(settings)]
     done = {}
     interrupted = False
     tick = time.perf_counter()
@@ -298,7 +428,7 @@ def run(scene, settings=None, repeats=3, samples=100, workers=None, scheduler=No
         interrupted = True
     rows = [done[i] for i in sorted(done)]
     return Results(scene, settings, rows, reference, int(repeats), int(samples), workers, where,
-                   time.perf_counter() - tick, interrupted)
+                   time.perf_counter() - tick, interrupted, budget)
 
 
 def _run_pool(tasks, workers, record):

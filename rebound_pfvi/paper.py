@@ -13,16 +13,24 @@ third of the classical scheme's steps at e = 0.95.
 The energy error is the largest relative error of the orbiter's specific
 energy over the period, taken after every step.
 """
+from __future__ import annotations
+
 import math
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from .scenes import kepler_relative, orbit_elements
+
+if TYPE_CHECKING:
+    import rebound
+
+Row = Dict[str, Any]
 
 EPSILONS = tuple(10.0 ** -k for k in range(3, 11))
 ECCENTRICITIES = (0.5, 0.9, 0.95, 0.99)
 SEED_CLAIM = "phase fitting needs close to one third of the classical steps (e = 0.95)"
 
 
-def seed_problem(e):
+def seed_problem(e: float) -> rebound.Simulation:
     import rebound
 
     import rebound_pfvi  # noqa: F401  (registers "pfvi")
@@ -39,7 +47,8 @@ def _specific_energy(sim):
         d.x**2 + d.y**2 + d.z**2)
 
 
-def one_period(e, epsilon, fitting, stages=2, step_control="seed"):
+def one_period(e: float, epsilon: float, fitting: str, stages: int = 2,
+               step_control: str = "seed") -> Tuple[float, int]:
     """Largest relative energy error over one period and the steps it took."""
     sim = seed_problem(e)
     period = sim.particles[1].P
@@ -59,7 +68,8 @@ def one_period(e, epsilon, fitting, stages=2, step_control="seed"):
     return worst, sim.integrator.n_steps
 
 
-def match_energy_error(e, target, fitting, start, stages=2, step_control="seed"):
+def match_energy_error(e: float, target: float, fitting: str, start: float, stages: int = 2,
+                       step_control: str = "seed") -> Optional[Tuple[float, float, int]]:
     """The largest tolerance (fewest steps) at which `fitting` keeps the energy
     error within `target`, by bisection in log10 epsilon from `start`.
     Returns (epsilon, energy error, steps), or None below epsilon = 1e-14."""
@@ -92,8 +102,9 @@ def match_energy_error(e, target, fitting, start, stages=2, step_control="seed")
     return best
 
 
-def figure1_rows(eccentricities=ECCENTRICITIES, epsilons=EPSILONS, stages=2, step_control="seed",
-                 progress=None):
+def figure1_rows(eccentricities: Sequence[float] = ECCENTRICITIES, epsilons: Sequence[float] = EPSILONS,
+                 stages: int = 2, step_control: str = "seed",
+                 progress: Optional[Callable[[Row], None]] = None) -> List[Row]:
     rows = []
     for e in eccentricities:
         for epsilon in epsilons:
@@ -114,7 +125,7 @@ def _fmt(x, spec):
     return "-" if x is None else format(x, spec)
 
 
-def figure1_table(rows):
+def figure1_table(rows: List[Row]) -> str:
     lines = ["| e | epsilon (phase) | phase: energy error | phase: steps | none: epsilon matched |"
              " none: energy error | none: steps | steps none / phase |",
              "|---|---|---|---|---|---|---|---|"]
@@ -125,7 +136,7 @@ def figure1_table(rows):
     return "\n".join(lines)
 
 
-def figure1_plot(rows, path):
+def figure1_plot(rows: List[Row], path: str) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -149,9 +160,25 @@ def figure1_plot(rows, path):
     plt.close(fig)
 
 
-def figure1(output, eccentricities=ECCENTRICITIES, epsilons=EPSILONS, stages=2, step_control="seed",
-            progress=None):
-    """Runs Figure 1 and writes figure1.md, figure1.png and figure1.json to `output`."""
+def _analysis_link(output: str) -> str:
+    """Where the page points for the analysis: a relative link to docs/adaptive.md
+    when the page is written next to it (in docs/paper), else its name in the
+    source repository, which an installed package does not carry."""
+    import os
+
+    adaptive = os.path.join(output, os.pardir, "adaptive.md")
+    if os.path.exists(adaptive):
+        link = os.path.relpath(adaptive, output).replace(os.sep, "/")
+        return f"[docs/adaptive.md]({link})"
+    return "docs/adaptive.md of the rebound_pfvi source repository"
+
+
+def figure1(output: str, eccentricities: Sequence[float] = ECCENTRICITIES, epsilons: Sequence[float] = EPSILONS,
+            stages: int = 2, step_control: str = "seed", progress: Optional[Callable[[Row], None]] = None,
+            command: Optional[str] = None) -> List[Row]:
+    """Runs Figure 1 and writes figure1.md, figure1.png and figure1.json to `output`.
+
+    command: how the page says it was produced (default: the CLI command with these options)."""
     import json
     import os
     import time
@@ -168,13 +195,16 @@ def figure1(output, eccentricities=ECCENTRICITIES, epsilons=EPSILONS, stages=2, 
         ratios = sorted(r["ratio"] for r in rows if r["e"] == e and r["ratio"] is not None)
         if ratios:
             summary.append(f"| {e} | {ratios[0]:.2f} | {ratios[len(ratios) // 2]:.2f} | {ratios[-1]:.2f} |")
-    command = "python3 -P -m rebound_pfvi paper fig1 --output " + output
-    if stages != 2 or step_control != "seed":
-        command += f" --stages {stages} --step-control {step_control}"
+    if command is None:
+        command = (f"python3 -P -m rebound_pfvi paper fig1 --output {output} --stages {stages} "
+                   f"--step-control {step_control}")
+        if (tuple(eccentricities), tuple(epsilons)) != (tuple(ECCENTRICITIES), tuple(EPSILONS)):
+            command = (f"rebound_pfvi.paper.figure1({output!r}, eccentricities={list(eccentricities)}, "
+                       f"epsilons={list(epsilons)}, stages={stages}, step_control={step_control!r})")
     text = f"""# The seed's Figure 1, rerun
 
 Generated by `{command}` ({wall:.0f} s on the machine that ran it);
-do not edit by hand: the analysis is in [../adaptive.md](../adaptive.md).
+do not edit by hand: the analysis is in {_analysis_link(output)}.
 
 Problem (seed section 5): a massless body about a unit mass at rest, G = 1,
 from pericentre, one period, stages = {stages}, step_control = "{step_control}".
@@ -213,15 +243,16 @@ def _pfvi(sim, stages, epsilon, step_control, fitting="phase"):
     sim.dt = sim.particles[1].P / 100.0
 
 
-def curvature_frequency(p):
+def curvature_frequency(p: rebound.Particle) -> float:
     """|v x a| / |v|^2 of a particle, from its velocity and last acceleration:
     the frequency the C core fits to (seed eq. "equ_freq")."""
     w = (p.vy * p.az - p.vz * p.ay, p.vz * p.ax - p.vx * p.az, p.vx * p.ay - p.vy * p.ax)
     return math.sqrt(w[0]**2 + w[1]**2 + w[2]**2) / (p.vx**2 + p.vy**2 + p.vz**2)
 
 
-def figure2_rows(e=0.95, periods=1e5, samples=2000, stages=4, epsilon=1e-6, step_control="reversible",
-                 progress=None):
+def figure2_rows(e: float = 0.95, periods: float = 1e5, samples: int = 2000, stages: int = 4, epsilon: float = 1e-6,
+                 step_control: str = "reversible",
+                 progress: Optional[Callable[[int, int], None]] = None) -> List[Row]:
     """Relative energy error and position error against time (seed Figure 2).
 
     The run stops at `samples` evenly spaced times without changing its steps
@@ -246,7 +277,8 @@ def figure2_rows(e=0.95, periods=1e5, samples=2000, stages=4, epsilon=1e-6, step
     return rows
 
 
-def figure3_rows(e=0.95, periods=10, stages=4, epsilon=1e-6, step_control="reversible"):
+def figure3_rows(e: float = 0.95, periods: float = 10, stages: int = 4, epsilon: float = 1e-6,
+                 step_control: str = "reversible") -> List[Row]:
     """The curvature frequency at every step over the first periods (seed Figure 3),
     beside its exact value on the exact orbit at the same time."""
     sim = seed_problem(e)
@@ -289,8 +321,10 @@ def _run_header(command, wall, what):
     return (f"Generated by `{command}` in {wall:.1f} s ({what}); do not edit by hand.\n")
 
 
-def figure2(output, e=0.95, periods=1e5, samples=2000, stages=4, epsilon=1e-6, step_control="reversible",
-            progress=None, command=None):
+def figure2(output: str, e: float = 0.95, periods: float = 1e5, samples: int = 2000, stages: int = 4,
+            epsilon: float = 1e-6, step_control: str = "reversible",
+            progress: Optional[Callable[[int, int], None]] = None,
+            command: Optional[str] = None) -> Tuple[List[Row], float]:
     """Runs Figure 2 and writes figure2.md, .png and .json to `output`; returns (rows, wall)."""
     import json
     import os
@@ -337,7 +371,8 @@ orbit's shape is kept, its timing drifts).
     return rows, wall
 
 
-def figure3(output, e=0.95, periods=10, stages=4, epsilon=1e-6, step_control="reversible", command=None):
+def figure3(output: str, e: float = 0.95, periods: float = 10, stages: int = 4, epsilon: float = 1e-6,
+            step_control: str = "reversible", command: Optional[str] = None) -> Tuple[List[Row], float]:
     """Runs Figure 3 and writes figure3.md, .png and .json to `output`; returns (rows, wall)."""
     import json
     import os

@@ -1,17 +1,25 @@
 """Writing a sweep's results: JSON, CSV, a markdown page and a work-precision PNG."""
+from __future__ import annotations
+
 import csv
 import json
 import math
 import os
 import platform
+from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Optional
+
+if TYPE_CHECKING:
+    from .compare import Results, Row
 
 #: Position errors (AU) at which the summary names the fastest run of each line.
 TARGETS = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)
-COLUMNS = ("line", "knob", "value", "status", "steps", "force_evaluations", "wall_s", "energy_error_max",
-           "energy_error_final", "position_error", "attempts_per_step", "iterations_mean")
+COLUMNS = ("line", "knob", "value", "verdict", "verdict_detail", "status", "steps",
+           "force_evaluations", "wall_s", "energy_error_max",
+           "energy_error_final", "position_error", "relative_position_error", "attempts_per_step",
+           "iterations_mean")
 
 
-def _fmt(value, spec):
+def _fmt(value: Any, spec: str) -> str:
     if value is None:
         return "-"
     if isinstance(value, float) and not math.isfinite(value):
@@ -19,37 +27,45 @@ def _fmt(value, spec):
     return format(value, spec)
 
 
-def _knob(row):
+def _knob(row: Row) -> str:
     if row["knob"] == "steps/period":
         return f"{row['value']:g} steps/period"
     return f"{row['knob']} {row['value']:.0e}"
 
 
-def length_unit(results):
+def length_unit(results: Results) -> str:
     """How the page names the position error's unit."""
     return "AU" if getattr(results.scene, "unit_names", True) is not None else "sim. length unit"
 
 
-def markdown_table(rows, length="AU"):
-    lines = ["| integrator | setting | steps | force evals | wall [s] | max rel. energy err | "
+def markdown_table(rows: Iterable[Row], length: str = "AU") -> str:
+    lines = ["| integrator | setting | verdict | steps | force evals | wall [s] | max rel. energy err | "
              f"final rel. energy err | position err [{length}] | note |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if r["status"] != "ok":
-            lines.append(f"| {r['line']} | {_knob(r)} | - | - | - | - | - | - | {r['status']} |")
+            message = r.get("verdict_detail") or r["status"]
+            lines.append(f"| {r['line']} | {_knob(r)} | {r.get('verdict', '-')} | - | - | - | - | - | - | "
+                         f"{message.replace('|', '/')} |")
             continue
         note = ""
+        if r.get("verdict") == "inaccurate":
+            note = r["verdict_detail"]
+        if r.get("warnings"):
+            note += ("; " if note else "") + "REBOUND warned (below)"
         if r["family"] == "pfvi":
-            note = f"{r['attempts_per_step']:.1f} trials/step, {r['iterations_mean']:.1f} iterations"
-        lines.append(f"| {r['line']} | {_knob(r)} | {r['steps']} | {r['force_evaluations']} | "
+            note += ("; " if note else "") + (f"{r['attempts_per_step']:.1f} trials/step, "
+                                              f"{r['iterations_mean']:.1f} iterations")
+        lines.append(f"| {r['line']} | {_knob(r)} | {r.get('verdict', '-')} | {r['steps']} | "
+                     f"{r['force_evaluations']} | "
                      f"{r['wall_s']:.3g} | {r['energy_error_max']:.2e} | {r['energy_error_final']:.2e} | "
                      f"{r['position_error']:.2e} | {note} |")
     return "\n".join(lines)
 
 
-def fastest(rows, target):
+def fastest(rows: Iterable[Row], target: float) -> Dict[str, Row]:
     """For each line, the run with the least wall time whose position error is <= target."""
-    best = {}
+    best: Dict[str, Row] = {}
     for r in rows:
         if r["status"] == "ok" and r["position_error"] <= target:
             if r["line"] not in best or r["wall_s"] < best[r["line"]]["wall_s"]:
@@ -57,7 +73,7 @@ def fastest(rows, target):
     return best
 
 
-def summary_table(rows, floor=0.0, length="AU"):
+def summary_table(rows: List[Row], floor: float = 0.0, length: str = "AU") -> str:
     lines_in_order = list(dict.fromkeys(r["line"] for r in rows))
     targets = [t for t in TARGETS if t > floor]
     head = "| position error <= | " + " | ".join(lines_in_order) + " |"
@@ -72,7 +88,119 @@ def summary_table(rows, floor=0.0, length="AU"):
     return "\n".join(lines)
 
 
-def plot(results, path):
+#: How each family gets to its accuracy: the reason behind its cost per unit of accuracy.
+HOW = {
+    "pfvi": "pfvi is implicit: each step solves its stage equations by iteration (several force evaluations per "
+            "stage), with adaptive steps from osculating circles; it is of order 2s - 2 (s = 2: 2, s = 4: 6, "
+            "s = 6: 10)",
+    "ias15": "IAS15 is a 15th-order adaptive predictor-corrector: long steps, each of several force evaluations",
+    "bs": "BS (Gragg-Bulirsch-Stoer) extrapolates to high order with adaptive steps",
+    "whfast": "WHFast takes fixed steps of an exact Kepler drift and interaction kicks (second order); its "
+              "error is that of the kicks, so it is cheap where the motion is nearly Keplerian and the step "
+              "resolves the closest approach",
+    "leapfrog": "LEAPFROG takes fixed second-order steps: an eccentric orbit's pericentre needs very many of them",
+}
+
+
+def whfast_caveat(results: Results) -> str:
+    """A sentence on what WHFast's result means on this scene, or "" if nothing needs saying."""
+    scene = results.scene
+    if not any(r["family"] == "whfast" for r in results.rows):
+        return ""
+    if scene.name == "kepler" or (scene.name == "custom" and scene.build().N == 2):
+        return ("**WHFast caveat**: this is a pure two-body Kepler problem, which WHFast solves exactly "
+                "(its Kepler drift is the solution and the kick vanishes), so its error is round-off at any "
+                "step: its rank here says nothing about perturbed problems. For a fair ranking run "
+                "`rebound-pfvi compare --scene comet`.")
+    if scene.name == "comet":
+        return ("WHFast is not exact here: Jupiter's pull, and the Sun's offset from the Sun-Jupiter "
+                "barycentre about which its Jacobi coordinates drift the comet, enter as kicks, largest at the "
+                "comet's pericentre, and its fixed steps (counted per comet period) cross that passage in few "
+                "steps.")
+    return ""
+
+
+def _times(ratio: float) -> str:
+    return f"{ratio:.0f}x" if ratio >= 10 else f"{ratio:.1f}x"
+
+
+def _per_evaluation(row: Row) -> float:
+    return row["wall_s"] / row["force_evaluations"] * 1e6 if row.get("force_evaluations") else math.nan
+
+
+def conclusions(results: Results, floor: float = 0.0, length: str = "AU") -> List[str]:
+    """One sentence per position error: who is fastest, by how much, and the measured reason
+    (force evaluations and wall time per evaluation against the best pfvi run)."""
+    sentences = []
+    for target in [t for t in TARGETS if t > floor]:
+        best = fastest(results.rows, target)
+        if not best:
+            sentences.append(f"To {target:.0e} {length}: no run of the sweep gets there.")
+            continue
+        order = sorted(best.values(), key=lambda r: r["wall_s"])
+        win = order[0]
+        text = f"To {target:.0e} {length}: {win['line']} ({_knob(win)}) is fastest, {win['wall_s']:.3g} s"
+        # The runner-up of another family; pfvi gets its own clause unless it wins.
+        other = next((r for r in order[1:] if r["family"] != win["family"]
+                      and (win["family"] == "pfvi" or r["family"] != "pfvi")), None)
+        if other:
+            text += f", {_times(other['wall_s'] / win['wall_s'])} faster than {other['line']} ({_knob(other)})"
+        pfvi = next((r for r in order if r["family"] == "pfvi"), None)
+        if win["family"] != "pfvi":
+            if pfvi is None:
+                text += "; no pfvi run of the sweep gets there"
+            else:
+                text += (f"; the fastest pfvi, {pfvi['line']} ({_knob(pfvi)}), takes {pfvi['wall_s']:.3g} s "
+                         f"({_times(pfvi['wall_s'] / win['wall_s'])}): {win['line']} needs "
+                         f"{win['force_evaluations']} force evaluations at {_per_evaluation(win):.2g} µs each, "
+                         f"pfvi {pfvi['force_evaluations']} at {_per_evaluation(pfvi):.2g} µs")
+        elif other:
+            text += (f": pfvi needs {win['force_evaluations']} force evaluations at {_per_evaluation(win):.2g} µs "
+                     f"each, {other['line']} {other['force_evaluations']} at {_per_evaluation(other):.2g} µs")
+        sentences.append(text + ".")
+    return sentences
+
+
+def conclusions_section(results: Results, floor: float = 0.0, length: str = "AU") -> str:
+    """The page's answer in words: who is fastest at each accuracy, why, and the WHFast caveat."""
+    families = list(dict.fromkeys(r["family"] for r in results.rows))
+    parts = ["\n".join(f"- {s}" for s in conclusions(results, floor, length)),
+             "Why (the wall time per force evaluation above is one evaluation plus the integrator's own work "
+             "per evaluation):\n\n" + "\n".join(f"- {HOW[f]}." for f in families if f in HOW)]
+    caveat = whfast_caveat(results)
+    if caveat:
+        parts.append(caveat)
+    return "\n\n".join(parts)
+
+
+def warnings_section(rows: Iterable[Row]) -> str:
+    """REBOUND's warnings, each explained once, with the runs that raised it."""
+    from .compare import explain_warning
+
+    by_message: Dict[str, List[str]] = {}
+    for r in rows:
+        for message in r.get("warnings", ()):
+            by_message.setdefault(message, []).append(f"{r['line']} {_knob(r)}")
+    return "\n".join(f"- \"{m}\" ({', '.join(runs)}): {explain_warning(m)}." for m, runs in by_message.items())
+
+
+def verdict_section(results: Results) -> str:
+    """What the verdicts mean, the tolerance, and the runs counted per verdict and integrator."""
+    from . import verdict
+
+    tolerance = getattr(results.scene, "tolerance", verdict.DEFAULT)
+    shown = verdict.VERDICTS if results.budget is not None else verdict.VERDICTS[:-1]
+    budget = (f" Budget: {results.budget:g} s of wall time per setting." if results.budget is not None
+              else " No budget was set (--budget), so no run can be over budget.")
+    return ("Each run's verdict: " + "; ".join(f"**{v}**: {verdict.MEANING[v]}" for v in shown) + "." + budget
+            + " "
+            + f"Tolerance: {tolerance.describe()} at t_end. A sweep includes loose settings on purpose, "
+            "so inaccurate runs are expected at its loose end; a refused run is pfvi declining a step it "
+            "cannot take (its message is in the table below).\n\n"
+            + verdict.markdown_counts(results.verdict_counts()))
+
+
+def plot(results: Results, path: str) -> None:
     """Work-precision diagram: position error and largest energy error against wall time."""
     import matplotlib
 
@@ -103,14 +231,15 @@ def plot(results, path):
     plt.close(fig)
 
 
-def machine():
+def machine() -> Dict[str, Any]:
     import rebound
 
     return {"python": platform.python_version(), "rebound": rebound.__version__, "machine": platform.machine(),
             "cores": os.cpu_count()}
 
 
-def write(results, output, basename=None, command=None):
+def write(results: Results, output: str, basename: Optional[str] = None,
+          command: Optional[str] = None) -> Dict[str, str]:
     """Writes <basename>.json, .csv, .md and .png (if matplotlib is installed)
     into `output` (basename: the scene's slug, e.g. kepler-e0.95); returns the
     paths written."""
@@ -152,6 +281,14 @@ error over {results.samples} evenly spaced times (an untimed rerun, which also c
 through a callback in additional_forces), and the final one. Position error: the largest distance of a
 particle from its reference position at t_end (Kepler: of the relative position).
 
+## Verdicts
+
+{verdict_section(results)}
+
+## Who is fastest at each accuracy, and why
+
+{conclusions_section(results, floor, length)}
+
 ## Fastest run of each integrator that reaches a position error
 
 {summary_table(results.rows, floor, length)}
@@ -161,7 +298,11 @@ particle from its reference position at t_end (Kepler: of the relative position)
 ## Every run
 
 {markdown_table(results.rows, length)}
-"""
+""" + (f"""
+## Warnings
+
+{warnings_section(results.rows)}
+""" if any(r.get("warnings") for r in results.rows) else "")
     with open(base + ".md", "w") as f:
         f.write(text)
     paths["md"] = base + ".md"

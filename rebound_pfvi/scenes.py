@@ -17,11 +17,21 @@ numbers, which are taken in AU, yr and Msun; the ``*_quantity`` accessors
 return Quantities. Which integrator families apply is part of the scene
 (WHFast needs a dominant central body).
 """
+from __future__ import annotations
+
 import functools
 import math
 from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING, Any, Dict, List, Optional, Tuple, cast
 
 from . import units
+
+if TYPE_CHECKING:
+    import rebound
+
+#: A force counter: a one-element list that build(counter=...) increments per evaluation.
+Counter = Optional[List[int]]
+Vector = Tuple[float, float, float]
 
 #: Integrator families every gravitational scene can use.
 GRAVITY_FAMILIES = ("pfvi", "ias15", "whfast", "leapfrog", "bs")
@@ -42,18 +52,18 @@ def _new_simulation():
 
 
 @functools.lru_cache(maxsize=None)
-def rebound_G():
+def rebound_G() -> float:
     """G in AU^3 / (Msun yr^2), as REBOUND sets it: the one G of every scene."""
     return _new_simulation().G
 
 
-def orbit_elements(sim, i=1):
+def orbit_elements(sim: rebound.Simulation, i: int = 1) -> Dict[str, float]:
     """Elements of particle i about particle 0, as a dict (a, e, inc, Omega, omega, M, n)."""
     o = sim.particles[i].orbit(primary=sim.particles[0])
     return dict(a=o.a, e=o.e, inc=o.inc, Omega=o.Omega, omega=o.omega, M=o.M, n=o.n)
 
 
-def kepler_relative(G, mass, m, elements, t):
+def kepler_relative(G: float, mass: float, m: float, elements: Dict[str, float], t: float) -> rebound.Particle:
     """The orbiter relative to its primary at time t (a ``rebound.Particle``):
     REBOUND's elements-to-Cartesian conversion of `elements` (at t = 0) with
     the mean anomaly advanced by n t. The exact reference of two-body runs."""
@@ -68,7 +78,7 @@ def kepler_relative(G, mass, m, elements, t):
     return ref.particles[1] - ref.particles[0]
 
 
-def _positions(sim):
+def _positions(sim: rebound.Simulation) -> List[Vector]:
     return [(p.x, p.y, p.z) for p in sim.particles]
 
 
@@ -76,44 +86,45 @@ class Scene:
     """Base class: subclasses are dataclasses of unitless numbers."""
 
     name = "scene"
-    families = GRAVITY_FAMILIES
+    periods: float  # every subclass sets it: the run's length in its periods
+    families: Tuple[str, ...] = GRAVITY_FAMILIES
     #: pfvi frequency options worth sweeping in this scene.
-    pfvi_frequencies = ("curvature",)
+    pfvi_frequencies: Tuple[str, ...] = ("curvature",)
     #: True if build(counter=...) counts its own force evaluations.
     counts_own_forces = False
 
     @property
-    def params(self):
-        return asdict(self)
+    def params(self) -> Dict[str, Any]:
+        return asdict(cast(Any, self))  # every subclass but Custom (own params) is a dataclass
 
-    def build(self, counter=None):
+    def build(self, counter: Counter = None) -> rebound.Simulation:
         raise NotImplementedError
 
     @property
-    def period(self):
+    def period(self) -> float:
         raise NotImplementedError
 
     @property
-    def t_end(self):
+    def t_end(self) -> float:
         return self.periods * self.period
 
-    def energy(self, sim):
+    def energy(self, sim: rebound.Simulation) -> float:
         return sim.energy()
 
-    def describe(self):
+    def describe(self) -> str:
         raise NotImplementedError
 
     @property
-    def slug(self):
+    def slug(self) -> str:
         """A file name for this scene's results, e.g. kepler-e0.95."""
         return f"{self.name}-e{self.e:g}" if hasattr(self, "e") else self.name
 
-    def configure_pfvi(self, sim, frequency):
+    def configure_pfvi(self, sim: rebound.Simulation, frequency: str) -> None:
         """Scene-specific pfvi options (the oscillator's known frequency)."""
         sim.integrator.frequency = frequency
 
     # References integrated with IAS15, for scenes without a closed form.
-    def reference(self):
+    def reference(self) -> Dict[str, Any]:
         """Positions of every particle at t_end, and an estimate of their error."""
         best = self._ias15_positions(REFERENCE_EPSILON)
         check = self._ias15_positions(REFERENCE_CHECK_EPSILON)
@@ -122,21 +133,33 @@ class Scene:
                 "how": f"IAS15, epsilon {REFERENCE_EPSILON:g} (uncertainty: distance to the run at "
                        f"epsilon {REFERENCE_CHECK_EPSILON:g})"}
 
-    def _ias15_positions(self, epsilon):
+    def _ias15_positions(self, epsilon: float) -> List[Vector]:
         sim = self.build()
         sim.integrator = "ias15"
         sim.integrator.epsilon = epsilon
         sim.integrate(self.t_end, exact_finish_time=1)
         return _positions(sim)
 
-    def position_error(self, sim, reference):
+    def position_error(self, sim: rebound.Simulation, reference: Dict[str, Any]) -> float:
         """Largest distance of a particle from its reference position at t_end."""
         return max(math.dist(p, q) for p, q in zip(_positions(sim), reference["positions"]))
 
-    def period_quantity(self):
+    def relative_position_error(self, sim: rebound.Simulation, reference: Dict[str, Any]) -> Optional[float]:
+        """The position error a run's verdict is judged by: each body's error
+        relative to particle 0, over its reference distance from particle 0
+        (:func:`rebound_pfvi.verdict.relative_position_error`). None if the
+        reference has no positions (a scene with its own position_error that
+        does not define this): the verdict then rests on the energy alone."""
+        from .verdict import relative_position_error
+
+        if "positions" not in reference:
+            return None
+        return relative_position_error(_positions(sim), reference["positions"])
+
+    def period_quantity(self) -> Any:
         return units.to_quantity(self.period, "time")
 
-    def t_end_quantity(self):
+    def t_end_quantity(self) -> Any:
         return units.to_quantity(self.t_end, "time")
 
 
@@ -158,7 +181,7 @@ class Kepler(Scene):
 
     name = "kepler"
 
-    def __init__(self, e=0.95, periods=100.0, a=1.0, mass=1.0, m=1e-3):
+    def __init__(self, e: Any = 0.95, periods: Any = 100.0, a: Any = 1.0, mass: Any = 1.0, m: Any = 1e-3) -> None:
         self.e = _number(e, "e")
         if not 0.0 <= self.e < 1.0:
             raise ValueError(f"e={e!r} is not a bound eccentricity; allowed: 0 <= e < 1")
@@ -167,9 +190,9 @@ class Kepler(Scene):
         self.mass = _positive(units.to_scene(mass, "mass", "mass"), "mass")
         self.m = units.to_scene(m, "mass", "m")
         if self.m < 0.0:
-            raise ValueError(f"m={m!r} is negative; the orbiter's mass must be >= 0")
+            raise ValueError(f"m={units.show(m)} is negative; the orbiter's mass must be >= 0")
 
-    def build(self, counter=None):
+    def build(self, counter: Counter = None) -> rebound.Simulation:
         sim = _new_simulation()
         sim.add(m=self.mass)
         sim.add(m=self.m, a=self.a, e=self.e)
@@ -177,23 +200,29 @@ class Kepler(Scene):
         return sim
 
     @property
-    def period(self):
+    def period(self) -> float:
         return 2.0 * math.pi * math.sqrt(self.a**3 / (rebound_G() * (self.mass + self.m)))
 
-    def reference(self):
+    def reference(self) -> Dict[str, Any]:
         return {"elements": orbit_elements(self.build()), "uncertainty": 0.0,
                 "how": "exact: REBOUND's orbital elements at t = 0, mean anomaly advanced by n t"}
 
-    def exact_relative_position(self, t, elements=None):
+    def exact_relative_position(self, t: float, elements: Optional[Dict[str, float]] = None) -> Vector:
         """Position of body 1 relative to body 0 at time t, from REBOUND's elements."""
         d = kepler_relative(rebound_G(), self.mass, self.m, elements or orbit_elements(self.build()), t)
         return d.x, d.y, d.z
 
-    def position_error(self, sim, reference):
+    def position_error(self, sim: rebound.Simulation, reference: Dict[str, Any]) -> float:
         d = sim.particles[1] - sim.particles[0]
         return math.dist((d.x, d.y, d.z), self.exact_relative_position(sim.t, reference["elements"]))
 
-    def describe(self):
+    def relative_position_error(self, sim: rebound.Simulation, reference: Dict[str, Any]) -> Optional[float]:
+        from .verdict import relative_vector_error
+
+        d = sim.particles[1] - sim.particles[0]
+        return relative_vector_error((d.x, d.y, d.z), self.exact_relative_position(sim.t, reference["elements"]))
+
+    def describe(self) -> str:
         return (f"Kepler: e = {self.e:g}, a = {self.a:g} AU, central mass {self.mass:g} Msun, orbiter "
                 f"{self.m:g} Msun, centre-of-mass frame, {self.periods:g} periods")
 
@@ -214,14 +243,14 @@ class Comet(Scene):
 
     name = "comet"
 
-    def __init__(self, e=0.95, a=10.0, periods=3.0):
+    def __init__(self, e: Any = 0.95, a: Any = 10.0, periods: Any = 3.0) -> None:
         self.e = _number(e, "e")
         if not 0.0 <= self.e < 1.0:
             raise ValueError(f"e={e!r} is not a bound eccentricity; allowed: 0 <= e < 1")
         self.a = _positive(units.to_scene(a, "length", "a"), "a")
         self.periods = _positive(_number(periods, "periods"), "periods")
 
-    def build(self, counter=None):
+    def build(self, counter: Counter = None) -> rebound.Simulation:
         sim = _new_simulation()
         sim.add(m=1.0)
         # Jupiter's mass as the nominal GM ratio, its mean elements (J2000, rounded).
@@ -233,10 +262,10 @@ class Comet(Scene):
         return sim
 
     @property
-    def period(self):
+    def period(self) -> float:
         return 2.0 * math.pi * math.sqrt(self.a**3 / rebound_G())
 
-    def describe(self):
+    def describe(self) -> str:
         return (f"Comet: Sun, Jupiter and a massless comet, e = {self.e:g}, a = {self.a:g} AU "
                 f"(pericentre {self.a * (1 - self.e):g} AU), inclination 20 deg, {self.periods:g} comet periods")
 
@@ -252,7 +281,7 @@ class Triple(Scene):
 
     name = "triple"
 
-    def __init__(self, e=0.7, a_inner=1.0, a_outer=10.0, periods=3.0):
+    def __init__(self, e: Any = 0.7, a_inner: Any = 1.0, a_outer: Any = 10.0, periods: Any = 3.0) -> None:
         self.e = _number(e, "e")
         if not 0.0 <= self.e < 1.0:
             raise ValueError(f"e={e!r} is not a bound eccentricity; allowed: 0 <= e < 1")
@@ -262,7 +291,7 @@ class Triple(Scene):
             raise ValueError(f"a_outer={a_outer} must exceed 3 a_inner for a hierarchical triple")
         self.periods = _positive(_number(periods, "periods"), "periods")
 
-    def build(self, counter=None):
+    def build(self, counter: Counter = None) -> rebound.Simulation:
         sim = _new_simulation()
         sim.add(m=1.0)
         sim.add(m=0.5, a=self.a_inner, e=self.e)
@@ -271,16 +300,16 @@ class Triple(Scene):
         return sim
 
     @property
-    def period(self):
+    def period(self) -> float:
         """The inner binary's period: the time scale fixed steps must resolve."""
         return 2.0 * math.pi * math.sqrt(self.a_inner**3 / (rebound_G() * 1.5))
 
     @property
-    def t_end(self):
+    def t_end(self) -> float:
         outer = 2.0 * math.pi * math.sqrt(self.a_outer**3 / (rebound_G() * 1.8))
         return self.periods * outer
 
-    def describe(self):
+    def describe(self) -> str:
         return (f"Hierarchical triple: 1 + 0.5 Msun binary, a = {self.a_inner:g} AU, e = {self.e:g}; "
                 f"0.3 Msun companion at a = {self.a_outer:g} AU, e = 0.2, inclined 30 deg; "
                 f"{self.periods:g} outer periods")
@@ -307,12 +336,12 @@ class Oscillator(Scene):
     pfvi_frequencies = ("curvature", "fixed")
     counts_own_forces = True
 
-    def __init__(self, omega=2.0 * math.pi, amplitude=1.0, periods=100.0):
+    def __init__(self, omega: Any = 2.0 * math.pi, amplitude: Any = 1.0, periods: Any = 100.0) -> None:
         self.omega = _positive(units.to_scene(omega, "frequency", "omega"), "omega")
         self.amplitude = _positive(units.to_scene(amplitude, "length", "amplitude"), "amplitude")
         self.periods = _positive(_number(periods, "periods"), "periods")
 
-    def build(self, counter=None):
+    def build(self, counter: Counter = None) -> rebound.Simulation:
         sim = _new_simulation()
         sim.gravity = "none"
         sim.add(m=1.0, x=self.amplitude, vy=0.5 * self.omega * self.amplitude)
@@ -330,28 +359,36 @@ class Oscillator(Scene):
         return sim
 
     @property
-    def period(self):
+    def period(self) -> float:
         return 2.0 * math.pi / self.omega
 
-    def energy(self, sim):
+    def energy(self, sim: rebound.Simulation) -> float:
         p = sim.particles[0]
         return 0.5 * (p.vx**2 + p.vy**2 + p.vz**2) + 0.5 * self.omega**2 * (p.x**2 + p.y**2 + p.z**2)
 
-    def configure_pfvi(self, sim, frequency):
+    def configure_pfvi(self, sim: rebound.Simulation, frequency: str) -> None:
         sim.integrator.frequency = frequency
         if frequency == "fixed":
             sim.integrator.omega = self.omega
 
-    def reference(self):
+    def reference(self) -> Dict[str, Any]:
         return {"uncertainty": 0.0, "how": "exact: x = A cos(omega t), y = (A/2) sin(omega t)"}
 
-    def position_error(self, sim, reference):
+    def position_error(self, sim: rebound.Simulation, reference: Dict[str, Any]) -> float:
         p = sim.particles[0]
         phase = self.omega * sim.t
         exact = (self.amplitude * math.cos(phase), 0.5 * self.amplitude * math.sin(phase), 0.0)
         return math.dist((p.x, p.y, p.z), exact)
 
-    def describe(self):
+    def relative_position_error(self, sim: rebound.Simulation, reference: Dict[str, Any]) -> Optional[float]:
+        from .verdict import relative_vector_error
+
+        p = sim.particles[0]
+        phase = self.omega * sim.t
+        exact = (self.amplitude * math.cos(phase), 0.5 * self.amplitude * math.sin(phase), 0.0)
+        return relative_vector_error((p.x, p.y, p.z), exact)
+
+    def describe(self) -> str:
         return (f"Harmonic oscillator: omega = {self.omega:g} /yr, ellipse {self.amplitude:g} x "
                 f"{self.amplitude / 2:g} AU, {self.periods:g} periods")
 
@@ -372,7 +409,7 @@ class Custom(Scene):
 
     name = "custom"
 
-    def __init__(self, sim, duration, period=None, label="custom"):
+    def __init__(self, sim: rebound.Simulation, duration: Any, period: Any = None, label: str = "custom") -> None:
         import pickle
 
         if sim.N < 1:
@@ -398,14 +435,14 @@ class Custom(Scene):
         self._state = pickle.dumps(sim)
 
     @property
-    def params(self):
+    def params(self) -> Dict[str, Any]:
         return {"label": self.label, "duration": self.duration, "period": self.period_value, "N": self.build().N}
 
     @property
-    def slug(self):
+    def slug(self) -> str:
         return self.label
 
-    def build(self, counter=None):
+    def build(self, counter: Counter = None) -> rebound.Simulation:
         import pickle
 
         import rebound_pfvi  # noqa: F401  (registers "pfvi" in this process)
@@ -413,20 +450,20 @@ class Custom(Scene):
         return pickle.loads(self._state)
 
     @property
-    def period(self):
+    def period(self) -> float:
         return self.period_value
 
     @property
-    def t_end(self):
+    def t_end(self) -> float:
         return self.t_start + self.duration
 
-    def describe(self):
+    def describe(self) -> str:
         sim = self.build()
         return (f"{self.label}: your simulation, N = {sim.N}, from t = {self.t_start:g} for {self.duration:g}"
                 f" (shortest period {self.period_value:g}){'' if self.unit_names else ', in its own units'}")
 
 
-def _sim_units(sim):
+def _sim_units(sim: rebound.Simulation) -> Optional[Tuple[str, str, str]]:
     """REBOUND_UNITS if the simulation was set up in AU, yr, Msun, else None."""
     u = sim.units
     return REBOUND_UNITS_LOWER if (u["length"], u["time"], u["mass"]) == REBOUND_UNITS_LOWER else None
@@ -435,7 +472,7 @@ def _sim_units(sim):
 REBOUND_UNITS_LOWER = ("au", "yr", "msun")
 
 
-def _plain(value, name):
+def _plain(value: Any, name: str) -> float:
     if hasattr(value, "unit"):
         raise ValueError(f"{name}={value}: this simulation has no units set (sim.units), give a plain number in "
                          "its time unit; or set sim.units = ('AU', 'yr', 'Msun') before adding particles")
@@ -445,7 +482,7 @@ def _plain(value, name):
 SCENES = {cls.name: cls for cls in (Kepler, Comet, Triple, Oscillator)}
 
 
-def make(name, **params):
+def make(name: str, **params: Any) -> Scene:
     """A scene by name, e.g. ``make("kepler", e=0.9, a="2 AU")``."""
     if name not in SCENES:
         raise ValueError(f"scene={name!r} is not a scene; allowed: {', '.join(SCENES)}")
@@ -455,7 +492,7 @@ def make(name, **params):
 _number = units.plain_number
 
 
-def _positive(number, name):
+def _positive(number: float, name: str) -> float:
     if not number > 0.0:
         raise ValueError(f"{name}={number!r} must be positive")
     return number

@@ -5,8 +5,9 @@ fitting, s = 2 and 4, adaptive steps unless the case prescribes fixed ones)
 beside IAS15 and WHFast. Every run is a separate process with a wall-time
 budget, so that a run which crashes, hangs or crawls becomes a row of the
 report ("crashed", "killed", "stopped by the budget") instead of taking the
-report down with it. Each row gives: the status (finished, refused with
-pfvi's error, stopped), the time reached, the relative energy error (final
+report down with it. Each row gives: the verdict (accurate, inaccurate,
+refused, crashed, over budget; :mod:`rebound_pfvi.verdict`, judged against
+the case's tolerance) with its detail, the time reached, the relative energy error (final
 and largest over 100 checkpoints), the position error against a reference at
 the time reached, steps, wall time, and what the integrator reported (u
 limited, steps rejected, asymmetric reversible steps).
@@ -17,13 +18,29 @@ elements with the mean anomaly advanced; the radial Kepler equation for the
 infall); otherwise IAS15 at epsilon 1e-11, with its distance to a run at
 1e-10 reported as the reference's uncertainty.
 """
+from __future__ import annotations
+
 import math
 import multiprocessing
 import threading
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
-from . import scenes
+from . import scenes, verdict
+
+if TYPE_CHECKING:
+    import pathlib
+
+    import rebound
+
+#: A row of the report: one run of one config on one case.
+Row = Dict[str, Any]
+#: A job of :func:`run_isolated`: a module-level function and its arguments.
+Job = Tuple[Callable[..., Any], Tuple[Any, ...]]
+#: What became of a job: ("ok", result) | ("error", message) | ("crashed", exit code) | ("killed", seconds).
+Outcome = Tuple[str, Any]
+Vector = Tuple[float, float, float]
 
 FITTINGS = ("phase", "phase-literal", "none")
 STAGES = (2, 4)
@@ -39,17 +56,18 @@ class Case:
 
     name: str
     title: str
-    build: object  # callable() -> rebound.Simulation at t = 0
+    build: Callable[[], rebound.Simulation]  # a new simulation at t = 0
     t_end: float
     time_scale: float  # the shortest dynamical time (period); sets first steps
     reference: str = "ias15"  # or "kepler" (exact two-body) or "radial" (exact infall)
-    fixed_dt: float = None  # fixed steps for pfvi (epsilon = 0) and WHFast
-    whfast_dt: float = None  # default time_scale / 100
+    fixed_dt: Optional[float] = None  # fixed steps for pfvi (epsilon = 0) and WHFast
+    whfast_dt: Optional[float] = None  # default time_scale / 100
     note: str = ""
-    exact: object = None  # callable(t) -> relative position (x, y, z) for exact references
+    exact: Optional[Callable[[float], Vector]] = None  # callable(t) -> relative position (x, y, z) for exact references
+    tolerance: verdict.Tolerance = verdict.DEFAULT  # what "accurate" means for this case
 
     @property
-    def whfast_step(self):
+    def whfast_step(self) -> float:
         if self.fixed_dt is not None:
             return self.fixed_dt
         return self.whfast_dt if self.whfast_dt is not None else self.time_scale / 100.0
@@ -86,11 +104,12 @@ def _period(a, mass):
     return 2.0 * math.pi * math.sqrt(a**3 / (_G() * mass))
 
 
-def _kepler_case(name, title, e, periods, m=1e-3, fixed_dt=None, note=""):
+def _kepler_case(name, title, e, periods, m=1e-3, fixed_dt=None, note="", tolerance=verdict.DEFAULT):
     build = _two_body(e, m=m)
     period = _period(1.0, 1.0 + m)
     return Case(name, title, build, periods * period, period, reference="kepler", note=note,
-                fixed_dt=(fixed_dt * period if fixed_dt is not None else None), exact=_kepler_exact(build))
+                fixed_dt=(fixed_dt * period if fixed_dt is not None else None), exact=_kepler_exact(build),
+                tolerance=tolerance)
 
 
 def _conic(q, e, f0, m=1e-3, mass=1.0):
@@ -258,8 +277,10 @@ def _build_cases():
         cases.append(_kepler_case(f"fixed-u-{label}", f"fixed steps of {dt:.3g} periods, u = omega dt = {u:g} at "
                                   f"pericentre ({label} u_max = 1), Kepler e = {e}, 3 periods", e, 3.0,
                                   fixed_dt=dt))
+    # 1000 steps of 1e-12 periods move the body by 1e-9 of its orbit: any
+    # error above round-off (1e-12 leaves room for 1000 steps of it) is a fault.
     tiny = _kepler_case("fixed-1e-12", "fixed steps of 1e-12 periods, 1000 steps, Kepler e = 0.9", 0.9,
-                        1000 * 1e-12, fixed_dt=1e-12)
+                        1000 * 1e-12, fixed_dt=1e-12, tolerance=verdict.Tolerance(energy=1e-12, position=1e-12))
     cases.append(tiny)
     cases.append(_kepler_case("long-e0.99", "10^5 periods at e = 0.99 (stopped by the budget if slower)",
                               0.99, 1e5))
@@ -270,7 +291,7 @@ def _build_cases():
 _CASES = None
 
 
-def cases():
+def cases() -> Dict[str, Case]:
     """Every case, by name (built once per process: some need G from REBOUND)."""
     global _CASES
     if _CASES is None:
@@ -283,19 +304,20 @@ def cases():
 @dataclass(frozen=True)
 class Config:
     family: str  # pfvi, ias15, whfast
-    fitting: str = None
-    stages: int = None
-    epsilon: float = None
+    fitting: Optional[str] = None
+    stages: Optional[int] = None
+    epsilon: Optional[float] = None
 
     @property
-    def label(self):
+    def label(self) -> str:
         if self.family == "pfvi":
             return f"pfvi {self.fitting} s={self.stages}"
         return self.family.upper() if self.family != "whfast" else "WHFast"
 
 
-def default_configs(integrators=("pfvi", "ias15", "whfast"), fittings=FITTINGS, stages=STAGES,
-                    epsilon=1e-6, ias15_epsilon=1e-9):
+def default_configs(integrators: Sequence[str] = ("pfvi", "ias15", "whfast"), fittings: Sequence[str] = FITTINGS,
+                    stages: Sequence[int] = STAGES, epsilon: float = 1e-6,
+                    ias15_epsilon: float = 1e-9) -> List[Config]:
     configs = []
     for family in integrators:
         if family == "pfvi":
@@ -309,7 +331,7 @@ def default_configs(integrators=("pfvi", "ias15", "whfast"), fittings=FITTINGS, 
     return configs
 
 
-def configure(sim, case, config):
+def configure(sim: rebound.Simulation, case: Case, config: Config) -> None:
     if config.family == "pfvi":
         sim.integrator = "pfvi"
         sim.integrator.fitting = config.fitting
@@ -351,7 +373,7 @@ def _positions(sim):
     return [(p.x, p.y, p.z) for p in sim.particles]
 
 
-def run(case_name, config, budget):
+def run(case_name: str, config: Config, budget: float) -> Row:
     """One run of `config` on a case, within `budget` seconds of integration."""
     case = cases()[case_name]
     row = {"case": case_name, "integrator": config.label, "family": config.family, "fitting": config.fitting,
@@ -401,10 +423,10 @@ def run(case_name, config, budget):
     return row
 
 
-def reference_positions(case_name, t, epsilon=scenes.REFERENCE_EPSILON):
+def reference_positions(case_name: str, t: float, epsilon: float = scenes.REFERENCE_EPSILON) -> Any:
     """Every particle's position at t from IAS15 (or the exact solution, relative to particle 0)."""
     case = cases()[case_name]
-    if case.reference in ("kepler", "radial"):
+    if case.exact is not None:  # the "kepler" and "radial" references
         return case.exact(t)
     sim = case.build()
     sim.integrator = "ias15"
@@ -415,12 +437,41 @@ def reference_positions(case_name, t, epsilon=scenes.REFERENCE_EPSILON):
     return _positions(sim)
 
 
-def position_error(case, row, reference):
+def position_error(case: Case, row: Row, reference: Any) -> float:
     positions = row["positions"]
     if case.reference in ("kepler", "radial"):
         d = [positions[1][k] - positions[0][k] for k in range(3)]
         return math.dist(d, reference)
     return max(math.dist(p, q) for p, q in zip(positions, reference))
+
+
+def relative_position_error(case: Case, row: Row, reference: Any) -> float:
+    """The position error the verdict is judged by: relative to each body's
+    reference distance from particle 0 (see :mod:`rebound_pfvi.verdict`)."""
+    positions = row["positions"]
+    if case.reference in ("kepler", "radial"):
+        d = [positions[1][k] - positions[0][k] for k in range(3)]
+        return verdict.relative_vector_error(d, reference)
+    return verdict.relative_position_error(positions, reference)
+
+
+def judge(case: Case, row: Row) -> Tuple[str, str]:
+    """(verdict, detail) of a row: see :mod:`rebound_pfvi.verdict`."""
+    status = row["status"]
+    if status == "finished":
+        return verdict.judge(row["energy_error_max"], row.get("relative_position_error"), case.tolerance,
+                             finite=row["finite"])
+    if status.startswith("stopped by the budget") or status.startswith("killed"):
+        detail = status
+        if row.get("fraction") is not None:
+            detail += f", at {row['fraction']:.3g} of the run"
+            if row.get("finite") and row.get("relative_position_error") is not None:
+                detail += (f" (so far: energy error {row['energy_error_max']:.2g}, position error "
+                           f"{row['relative_position_error']:.2g} of the distance)")
+        return verdict.OVER_BUDGET, detail
+    if status.startswith("refused: "):
+        return verdict.REFUSED, status[len("refused: "):]
+    return verdict.CRASHED, status
 
 
 # --- running many, each in its own process -------------------------------------
@@ -443,14 +494,15 @@ def _child(conn, job):
 
 @dataclass
 class _Slot:
-    process: object
-    conn: object
-    job: tuple
+    process: Any  # multiprocessing's process and connection
+    conn: Any
+    job: Job
     index: int
     deadline: float
 
 
-def run_isolated(jobs, workers=2, hard_limits=None, progress=None):
+def run_isolated(jobs: Sequence[Job], workers: int = 2, hard_limits: Optional[Sequence[float]] = None,
+                 progress: Optional[Callable[[int, Outcome], None]] = None) -> List[Outcome]:
     """Runs each job, a (module-level function, args) pair, in a fresh process,
     at most `workers` at once.
 
@@ -459,9 +511,9 @@ def run_isolated(jobs, workers=2, hard_limits=None, progress=None):
     its hard limit (seconds) has passed.
     """
     ctx = multiprocessing.get_context("spawn")
-    results = [None] * len(jobs)
+    results: List[Outcome] = [("error", "not run")] * len(jobs)  # each replaced when its job ends
     pending = list(range(len(jobs)))
-    running = []
+    running: List[_Slot] = []
     try:
         while pending or running:
             while pending and len(running) < max(1, workers):
@@ -486,7 +538,7 @@ def run_isolated(jobs, workers=2, hard_limits=None, progress=None):
                     outcome = ("crashed", slot.process.exitcode)
                 elif time.monotonic() > slot.deadline:
                     slot.process.kill()
-                    outcome = ("killed", hard_limits[slot.index])
+                    outcome = ("killed", hard_limits[slot.index] if hard_limits else math.inf)
                 if outcome is not None:
                     slot.process.join()
                     slot.conn.close()
@@ -503,12 +555,12 @@ def run_isolated(jobs, workers=2, hard_limits=None, progress=None):
 
 @dataclass
 class Report:
-    rows: list
-    references: dict = field(default_factory=dict)
+    rows: List[Row]
+    references: Dict[str, Any] = field(default_factory=dict)
     budget: float = 0.0
     wall_s: float = 0.0
 
-    def to_dict(self):
+    def to_dict(self) -> Dict[str, Any]:
         return {"budget_s": self.budget, "wall_s": self.wall_s, "rows": self.rows,
                 "references": self.references,
                 "cases": {name: {"title": c.title, "t_end": c.t_end, "reference": c.reference,
@@ -516,9 +568,9 @@ class Report:
                           for name, c in cases().items() if name in self.references}}
 
 
-def what_happened(row):
-    """The status, and what pfvi counted on the way."""
-    parts = [row["status"]]
+def what_happened(row: Row) -> str:
+    """The verdict with its detail (else the status), and what pfvi counted on the way."""
+    parts = [row["verdict_detail"] if row.get("verdict_detail") else row["status"]]
     if row.get("family") == "pfvi" and "n_steps" in row:
         if row["n_u_limited"]:
             parts.append(f"u limited in {row['n_u_limited']} particle-steps")
@@ -540,7 +592,9 @@ def _failed_status(outcome):
     return f"error: {detail}"
 
 
-def run_all(case_names=None, configs=None, budget=60.0, workers=2, progress=None):
+def run_all(case_names: Optional[Sequence[str]] = None, configs: Optional[Sequence[Config]] = None,
+            budget: float = 60.0, workers: int = 2,
+            progress: Optional[Callable[[int, Outcome], None]] = None) -> Report:
     """Every case x every config, each run isolated; references first."""
     table = cases()
     names = list(case_names) if case_names else list(table)
@@ -581,10 +635,13 @@ def run_all(case_names=None, configs=None, budget=60.0, workers=2, progress=None
             elif case.reference == "ias15":
                 reference = references[name]["positions"]
             else:
+                assert case.exact is not None, f"case {name}: an exact reference needs exact(t)"
                 reference = case.exact(row["t"])
             row["position_error"] = position_error(case, row, reference)
+            row["relative_position_error"] = relative_position_error(case, row, reference)
         else:
-            row["position_error"] = None
+            row["position_error"] = row["relative_position_error"] = None
+        row["verdict"], row["verdict_detail"] = judge(case, row)
         row["what_happened"] = what_happened(row)
         rows.append(row)
     return Report(rows, references, budget, time.perf_counter() - tick)
@@ -598,17 +655,28 @@ def _fmt(x, spec=".2g"):
     return format(x, spec)
 
 
-def markdown(report, command=None):
-    """The report as markdown: one table per case."""
+def verdict_counts(report: Report) -> Dict[str, Dict[str, int]]:
+    """{integrator: {verdict: runs}} over every case of the report."""
+    return verdict.count(report.rows, "integrator")
+
+
+def markdown(report: Report, command: Optional[str] = None) -> str:
+    """The report as markdown: the verdicts counted per integrator, then one table per case."""
     lines = ["# Stability report: extreme cases", ""]
     if command:
         lines += [f"Produced by `{command}` in {report.wall_s:.0f} s (2 cores here); every run in its own "
                   f"process with a budget of {report.budget:g} s of integration.", ""]
-    lines += ["Columns: status and what the integrator counted; t reached as a fraction of the case's end; "
+    lines += ["## Verdicts", "",
+              "Each run's verdict: " + "; ".join(f"**{v}**: {verdict.MEANING[v]}" for v in verdict.VERDICTS)
+              + f". Tolerance unless a case says otherwise: {verdict.DEFAULT.describe()} (the reference's "
+              "distance at the time reached: the size of the orbit where the body is).", "",
+              verdict.markdown_counts(verdict_counts(report)), ""]
+    lines += ["Columns: the verdict; what happened (the error against the tolerance, the refusal's message, or "
+              "the budget) and what the integrator counted; t reached as a fraction of the case's end; "
               "relative energy error at the end and the largest over 100 checkpoints (for the parabola, "
               "relative to |T0| + |V0|); largest position error against the reference at the time reached "
               "(AU; for two-body cases the relative vector); steps; wall time.", ""]
-    by_case = {}
+    by_case: Dict[str, List[Row]] = {}
     for row in report.rows:
         by_case.setdefault(row["case"], []).append(row)
     for name, rows in by_case.items():
@@ -618,20 +686,22 @@ def markdown(report, command=None):
         how = ref.get("how", "")
         if ref.get("uncertainty"):
             how += f" = {ref['uncertainty']:.2g} AU"
-        lines += [f"Reference: {how}. "
+        tolerance = "" if case.tolerance == verdict.DEFAULT else f"Tolerance: {case.tolerance.describe()}. "
+        lines += [f"Reference: {how}. " + tolerance
                   + (f"Fixed steps: {case.fixed_dt:.3g} yr (pfvi epsilon = 0, WHFast). " if case.fixed_dt else
                      f"WHFast dt = {case.whfast_step:.3g} yr. ") + case.note, ""]
-        lines += ["| integrator | t reached | energy error (end / max) | position error | steps | wall s | "
-                  "what happened |", "|---|---|---|---|---|---|---|"]
+        lines += ["| integrator | verdict | what happened | t reached | energy error (end / max) | position error "
+                  "[AU] | steps | wall s |", "|---|---|---|---|---|---|---|---|"]
         for r in rows:
-            lines.append(f"| {r['integrator']} | {_fmt(r['fraction'], '.3g')} | {_fmt(r['energy_error'])} / "
+            lines.append(f"| {r['integrator']} | {r.get('verdict', '-')} | {r['what_happened'].replace('|', '/')} | "
+                         f"{_fmt(r['fraction'], '.3g')} | {_fmt(r['energy_error'])} / "
                          f"{_fmt(r['energy_error_max'])} | {_fmt(r['position_error'])} | {_fmt(r['steps'], 'd')} | "
-                         f"{_fmt(r['wall_s'], '.3g')} | {r['what_happened'].replace('|', '/')} |")
+                         f"{_fmt(r['wall_s'], '.3g')} |")
         lines.append("")
     return "\n".join(lines)
 
 
-def write(report, directory, command=None):
+def write(report: Report, directory: Any, command: Optional[str] = None) -> List[pathlib.Path]:
     """stability.json and stability.md in `directory`; returns their paths."""
     import json
     import pathlib

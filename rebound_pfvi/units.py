@@ -13,7 +13,10 @@ here builds a simulation in SI units.
 astropy is imported on first use, so that ``import rebound_pfvi`` and the
 integrator never need it.
 """
+from __future__ import annotations
+
 import math
+from typing import Any, Optional
 
 #: The unit system of every scene, as REBOUND's ``sim.units`` names it.
 REBOUND_UNITS = ("AU", "yr", "Msun")
@@ -28,13 +31,13 @@ ALLOWED = {
 }
 
 
-def _u():
+def _u() -> Any:
     import astropy.units as u
 
     return u
 
 
-def scene_unit(kind):
+def scene_unit(kind: str) -> Any:
     """The astropy unit of a scene's numbers of one kind: length, time, mass,
     frequency (1/yr), speed (AU/yr) or energy per mass (AU^2/yr^2)."""
     u = _u()
@@ -47,7 +50,7 @@ def scene_unit(kind):
     return derived[kind]
 
 
-def parse(text, kind, name):
+def parse(text: str, kind: str, name: str) -> Any:
     """A Quantity from a string such as "1 AU" or "0.3 Mjup" (the command line).
 
     `name` is the argument's name, used in the error when the text is not a
@@ -59,10 +62,20 @@ def parse(text, kind, name):
         raise ValueError(f"{name}: cannot read {text!r} as a quantity ({error}); "
                          f"write a number and a unit, e.g. \"1 {ALLOWED[kind][0]}\" "
                          f"(units: {', '.join(ALLOWED[kind])})") from None
+    if value.unit == u.dimensionless_unscaled:
+        raise ValueError(f"{name}: {text!r} has no unit; write a number and a unit, e.g. "
+                         f"\"{text.strip()} {ALLOWED[kind][0]}\" (units: {', '.join(ALLOWED[kind])})")
     return value
 
 
-def to_scene(value, kind, name):
+def show(value: Any) -> str:
+    """A value for an error message: a Quantity as "-1 jupiterMass", anything else as its repr."""
+    if hasattr(value, "unit") and hasattr(value, "value"):
+        return f"{value.value:g} {value.unit}" if value.isscalar else str(value)
+    return repr(value)
+
+
+def to_scene(value: Any, kind: str, name: str) -> float:
     """A float in the scene's unit of `kind` from a Quantity, or a plain number
     taken to be in that unit already. `name` names the argument in errors."""
     if isinstance(value, str):
@@ -78,12 +91,12 @@ def to_scene(value, kind, name):
                              f"allowed: {', '.join(ALLOWED.get(kind, (str(unit),)))}") from None
         number = float(number)
         if not math.isfinite(number):
-            raise ValueError(f"{name}={value!r} is not finite")
+            raise ValueError(f"{name}={show(value)} is not finite")
         return number
     return plain_number(value, name)
 
 
-def plain_number(value, name):
+def plain_number(value: Any, name: str) -> float:
     """A finite float from a number (not a bool); errors name the argument."""
     if isinstance(value, bool):
         raise ValueError(f"{name}={value!r} is not a number")
@@ -96,7 +109,7 @@ def plain_number(value, name):
     return number
 
 
-def to_quantity(number, kind, unit=None):
+def to_quantity(number: float, kind: str, unit: Optional[Any] = None) -> Any:
     """A scene number as a Quantity, in the scene unit or converted to `unit`."""
     q = number * scene_unit(kind)
     return q if unit is None else q.to(unit)

@@ -112,7 +112,8 @@ def test_ctrl_c_stops_and_keeps_finished_runs(tmp_path, workers):
 
 def test_quick_cli_run_writes_table_data_and_png_with_every_integrator(tmp_path, capsys):
     out = tmp_path / "results"
-    code = main(["compare", "--e", "0.9", "--periods", "2", "--repeats", "1", "--samples", "4", "--workers", "1",
+    code = main(["compare", "--scene", "kepler", "--e", "0.9", "--periods", "2", "--repeats", "1", "--samples", "4",
+                 "--workers", "1",
                  "--output", str(out)])
     assert code == 0
     data = json.loads((out / "kepler-e0.9.json").read_text())
@@ -125,7 +126,36 @@ def test_quick_cli_run_writes_table_data_and_png_with_every_integrator(tmp_path,
     png = (out / "kepler-e0.9.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20000
     assert len((out / "kepler-e0.9.csv").read_text().splitlines()) == data["settings"] + 1
-    assert "Fastest to a position error" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "Fastest to a position error" in out
+    # Every run has a verdict, counted per integrator on the page and on the command line.
+    assert {r["verdict"] for r in data["rows"]} <= {"accurate", "inaccurate", "refused", "crashed"}
+    assert "## Verdicts" in table and "| **all** |" in table
+    assert "Verdicts" in out and "inaccurate" in out
+    # WHFast is exact on two bodies: the page and the command line say so.
+    assert "**WHFast caveat**: this is a pure two-body Kepler problem" in table
+    assert "WHFast caveat: this is a pure two-body Kepler problem" in out
+
+
+def test_main_job_is_the_comet_and_its_page_says_who_is_fastest_and_why(tmp_path, capsys):
+    """The README's first command runs a scene in which no integrator is exact (issue 18, item 2)."""
+    out = tmp_path / "results"
+    assert main(["compare", "--periods", "0.5", "--repeats", "1", "--samples", "3", "--workers", "1",
+                 "--output", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["comet-e0.95.csv", "comet-e0.95.json", "comet-e0.95.md",
+                                                    "comet-e0.95.png"]
+    page = (out / "comet-e0.95.md").read_text()
+    data = json.loads((out / "comet-e0.95.json").read_text())
+    assert "## Who is fastest at each accuracy, and why" in page and "WHFast is not exact here" in page
+    assert "WHFast caveat" not in page
+    best = report.fastest(data["rows"], 1e-2)
+    winner = min(best.values(), key=lambda r: r["wall_s"])
+    # The sentence names the measured winner, its time and its force evaluations.
+    sentence = next(line for line in page.splitlines() if line.startswith("- To 1e-02 AU: "))
+    assert sentence.startswith(f"- To 1e-02 AU: {winner['line']} ") and f"{winner['wall_s']:.3g} s" in sentence
+    if winner["family"] != "pfvi":
+        assert f"needs {winner['force_evaluations']} force evaluations" in sentence
+    assert "- To 1e-02 AU: " in capsys.readouterr().out
 
 
 @pytest.mark.parametrize("argv,words", [
@@ -141,6 +171,10 @@ def test_quick_cli_run_writes_table_data_and_png_with_every_integrator(tmp_path,
     (["compare", "--scene", "moon"], ["--scene", "kepler"]),
     (["compare", "--periods", "-3"], ["periods", "positive"]),
     (["paper", "fig4"], ["figure", "fig2"]),
+    (["compare", "--a", "2"], ["argument --a: '2' has no unit", 'e.g. "2 AU"']),
+    (["compare", "--scene", "kepler", "--m", "-1 Mjup"], ["m=-1 jupiterMass is negative"]),
+    (["compare", "--mass", "1 Msun"], ["--mass", "not a parameter of scene 'comet'"]),
+    (["compare", "--budget", "0"], ["argument --budget: '0' must be positive"]),
 ])
 def test_argument_errors_name_the_argument(argv, words, capsys):
     with pytest.raises(SystemExit) as stop:
@@ -149,6 +183,21 @@ def test_argument_errors_name_the_argument(argv, words, capsys):
     err = capsys.readouterr().err
     for word in words:
         assert word in err, (word, err)
+    assert "<Quantity" not in err and "has unit ," not in err
+    # The usage is the subcommand's, whether argparse or the command found the error.
+    assert err.startswith(f"usage: rebound-pfvi {argv[0]} "), err
+
+
+@pytest.mark.parametrize("command, default", [("compare", "rebound-pfvi-results"),
+                                              ("stability", "rebound-pfvi-stability"),
+                                              ("paper", "docs/paper")])
+def test_help_gives_the_default_output_folder(command, default, capsys):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    import re
+
+    out = re.sub(r"-\s+", "-", " ".join(capsys.readouterr().out.split()))  # undo argparse's wrapping
+    assert f"(default: {default}" in out or f"(default {default})" in out, out
 
 
 def test_unit_round_trip_and_one_g():
@@ -258,13 +307,13 @@ def test_custom_scene_from_a_users_simulation(tmp_path):
 
 
 def test_heavy_imports_stay_lazy():
-    """Importing the package and the comparison modules pulls in neither astropy, matplotlib nor dask."""
+    """Importing the package and the comparison modules pulls in neither astropy, matplotlib, tqdm nor dask."""
     import subprocess
     import sys
 
     code = ("import sys, rebound_pfvi, rebound_pfvi.compare, rebound_pfvi.scenes, rebound_pfvi.report, "
             "rebound_pfvi.paper, rebound_pfvi.__main__ as cli; cli.build_parser(); "
-            "print(sorted(m for m in ('astropy', 'matplotlib', 'dask', 'distributed') if m in sys.modules))")
+            "print(sorted(m for m in ('astropy', 'matplotlib', 'tqdm', 'dask', 'distributed') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-P", "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
 
@@ -282,3 +331,56 @@ def test_script_without_main_guard_fails_instead_of_respawning(tmp_path):
     assert done.returncode != 0
     assert "workers: a worker process died before returning its run" in done.stderr
     assert "__main__" in done.stderr
+
+
+def test_ias15_warning_is_explained_not_printed_raw(capsys, tmp_path):
+    """IAS15 at epsilon 1e-3 on the comet warns that its predictor-corrector did not converge:
+    the row keeps the warning, the page and the command line explain it (issue 18, item 7)."""
+    # (measured: the warning appears with 100 samples, not with 3)
+    assert main(["compare", "--integrators", "ias15", "--repeats", "1", "--samples", "100", "--workers", "1",
+                 "--output", str(tmp_path)]) == 0
+    captured = capsys.readouterr()
+    assert "RuntimeWarning" not in captured.err
+    data = json.loads((tmp_path / "comet-e0.95.json").read_text())
+    loose = next(r for r in data["rows"] if r["value"] == 1e-3)
+    assert any("predictor corrector loops in IAS15 did not converge" in w for w in loose["warnings"])
+    assert "steps are too long for the tolerance" in captured.out
+    page = (tmp_path / "comet-e0.95.md").read_text()
+    assert "## Warnings" in page and "(IAS15 epsilon 1e-03): IAS15's predictor-corrector" in page
+
+
+def test_figure1_page_links_and_names_the_command_that_ran(tmp_path):
+    from rebound_pfvi import paper
+    from rebound_pfvi.__main__ import invocation
+
+    command = invocation(["paper", "fig1", "--output", str(tmp_path / "a b")])
+    assert command == f"python3 -P -m rebound_pfvi paper fig1 --output '{tmp_path / 'a b'}'"
+    alone = tmp_path / "alone"
+    paper.figure1(str(alone), eccentricities=(0.5,), epsilons=(1e-3,), command="the command as run")
+    text = (alone / "figure1.md").read_text()
+    assert "Generated by `the command as run`" in text
+    # No docs/adaptive.md beside the page: no link that would break, its name in the source instead.
+    assert "](../adaptive.md)" not in text and "docs/adaptive.md of the rebound_pfvi source repository" in text
+    docs = tmp_path / "docs"
+    (docs / "paper").mkdir(parents=True)
+    (docs / "adaptive.md").write_text("# adaptive\n")
+    paper.figure1(str(docs / "paper"), eccentricities=(0.5,), epsilons=(1e-3,))
+    text = (docs / "paper" / "figure1.md").read_text()
+    assert "[docs/adaptive.md](../adaptive.md)" in text
+    # Without a command, the page names a call that reruns exactly these options.
+    assert "eccentricities=[0.5], epsilons=[0.001], stages=2, step_control='seed'" in text
+
+
+def test_version_names_the_package_and_rebound():
+    import rebound
+
+    import rebound_pfvi
+
+    done = subprocess.run([sys.executable, "-P", "-m", "rebound_pfvi", "--version"], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == (f"rebound-pfvi {rebound_pfvi.__version__} (rebound {rebound.__version__}; C core "
+                           f"compiled against rebound {rebound.__version__})\n")
+    from importlib.metadata import version
+
+    assert rebound_pfvi.__version__ == version("rebound_pfvi")  # the installed distribution's (pyproject)

@@ -12,6 +12,10 @@ def test_compare_script(tmp_path, monkeypatch, capsys):
     runpy.run_path(str(EXAMPLES / "compare_eccentric.py"), run_name="__main__")
     out = capsys.readouterr().out
     assert "pfvi: steps" in out and "position_error_km" in out
+    assert "- period 1154.4 d\n" in out  # rounded, not 1154.3552221033613 d
+    # Every row, with its knob value: the extra s = 6 run at epsilon 1e-08 and LEAPFROG's 10000 steps/period.
+    assert "..." not in out and "pfvi s=6 none epsilon 1e-08" in " ".join(out.split())
+    assert "LEAPFROG steps/period 1e+04" in " ".join(out.split())
     assert sorted(p.name for p in (tmp_path / "compare-example").iterdir()) == [
         "kepler-e0.9.csv", "kepler-e0.9.json", "kepler-e0.9.md", "kepler-e0.9.png"]
 

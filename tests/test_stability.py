@@ -103,8 +103,19 @@ def test_cli_writes_the_report(tmp_path):
     assert rows["radial-infall", "IAS15"]["position_error"] < 1e-12
     assert rows["radial-infall", "pfvi phase s=4"]["position_error"] < 1e-6
     assert rows["radial-infall", "pfvi phase s=2"]["position_error"] < 1e-3
+    # Finished is not enough: s = 2 ends the infall with an energy error of 7.8.
+    assert {rows["radial-infall", f"pfvi {f} s=2"]["verdict"] for f in stability.FITTINGS} == {"inaccurate"}
+    assert rows["radial-infall", "IAS15"]["verdict"] == rows["flyby-e5", "IAS15"]["verdict"] == "accurate"
     text = (tmp_path / "out" / "stability.md").read_text()
-    assert "## radial-infall" in text and "## flyby-e5" in text and "rebound-pfvi stability" in text
+    assert "## radial-infall" in text and "## flyby-e5" in text
+    assert "python3 -P -m rebound_pfvi stability --cases radial-infall,flyby-e5" in text  # the command as run
+    counts = {}
+    for r in rows.values():
+        counts.setdefault(r["integrator"], []).append(r["verdict"])
+    for name, verdicts in counts.items():  # the page counts the verdicts per integrator
+        line = f"| {name} | " + " | ".join(str(verdicts.count(v)) for v in stability.verdict.VERDICTS) + " |"
+        assert line in text
+    assert "Verdicts" in done.stdout and "IAS15" in done.stdout
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
 
 
@@ -117,3 +128,18 @@ def test_cli_argument_errors_name_the_argument(args, message, tmp_path):
     done = cli(*args, cwd=tmp_path)
     assert done.returncode == 2
     assert message in done.stderr
+
+
+def test_cli_progress_bar_and_failed_runs_in_full_at_the_end(tmp_path):
+    # u = 40 u_max at pericentre: s = 4's stage solve cannot converge and pfvi refuses (docs/stability.md).
+    done = cli("--cases", "fixed-u-40x", "--integrators", "pfvi", "--budget", "20", "--output", str(tmp_path / "o"),
+               cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    # A tqdm bar: runs done of the total, elapsed and time left; it names runs, never their messages.
+    assert "6/6 [" in done.stderr and "<00:00" in done.stderr
+    assert "did not converge" not in done.stderr
+    refusals = [line for line in done.stdout.splitlines() if line.startswith("- fixed-u-40x: pfvi ")]
+    assert len(refusals) == 3, done.stdout
+    for line in refusals:  # the whole message, to its last word
+        assert " s=4: refused: pfvi: the 4-stage solve did not converge" in line
+        assert line.endswith("step not taken, state restored. Lower dt."), line
