@@ -22,6 +22,7 @@ import time
 import rebound
 
 import rebound_pfvi  # noqa: F401  (registers "pfvi")
+from rebound_pfvi.integrators import configure as configure_integrator
 
 
 def pair(e, frame="seed"):
@@ -44,11 +45,7 @@ def energy(sim):
 
 
 def configure(sim, epsilon, step_control, fitting, stages):
-    sim.integrator = "pfvi"
-    sim.integrator.epsilon = epsilon
-    sim.integrator.step_control = step_control
-    sim.integrator.fitting = fitting
-    sim.integrator.stages = stages
+    configure_integrator(sim, "pfvi", epsilon=epsilon, step_control=step_control, fitting=fitting, stages=stages)
 
 
 def longterm(e, orbits, epsilon, stages, frame):
@@ -190,8 +187,7 @@ def defaults(orbits):
         for stages in (2, 4):
             sim = pair(e, "com")
             E0 = sim.energy()
-            sim.integrator = "pfvi"
-            sim.integrator.stages = stages
+            configure_integrator(sim, "pfvi", stages=stages)
             tick = time.perf_counter()
             try:
                 sim.integrate(orbits * sim.particles[1].P)

@@ -45,6 +45,7 @@ import time
 import rebound
 
 import rebound_pfvi  # noqa: F401
+from rebound_pfvi.integrators import configure as configure_integrator
 
 STAGES = (2, 3, 4, 5, 6)
 
@@ -58,9 +59,7 @@ def two_body(e):
 
 
 def configure(sim, integrator, fields):
-    sim.integrator = integrator
-    for name, value in fields.items():
-        setattr(sim.integrator, name, value)
+    configure_integrator(sim, integrator, **fields)
 
 
 def pfvi(s, fitting):

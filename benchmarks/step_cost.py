@@ -19,6 +19,7 @@ import time
 import rebound
 
 import rebound_pfvi  # noqa: F401
+from rebound_pfvi.integrators import configure as configure_integrator
 
 
 def two_body():
@@ -61,10 +62,7 @@ def _no_op(simp):
 def time_once(make, setting, steps):
     sim, dt = make()
     integrator, fields = SETTINGS[setting]
-    sim.integrator = integrator
-    for name, value in fields.items():
-        setattr(sim.integrator, name, value)
-    sim.dt = dt
+    configure_integrator(sim, integrator, dt=dt, **fields)
     if setting.endswith("+ heartbeat"):
         sim.heartbeat = _no_op
     tick = time.perf_counter()

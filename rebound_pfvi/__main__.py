@@ -353,6 +353,7 @@ def run_paper(args: argparse.Namespace, argv: List[str]) -> int:
 
 
 def run_stability(args: argparse.Namespace, argv: List[str]) -> int:
+    from . import report as report_module
     from . import stability
 
     if args.list:
@@ -381,9 +382,9 @@ def run_stability(args: argparse.Namespace, argv: List[str]) -> int:
     finally:
         bar.close()
     command = invocation(argv)
-    paths = stability.write(report, args.output, command=command)
+    paths = report_module.write_stability(report, args.output, command=command)
     print(f"Wrote {', '.join(map(str, paths))} ({report.wall_s:.0f} s)")
-    _print_verdicts(stability.verdict_counts(report), report.rows, "integrator")
+    _print_verdicts(report_module.stability_verdict_counts(report), report.rows, "integrator")
     return 0
 
 

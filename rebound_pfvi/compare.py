@@ -32,6 +32,9 @@ import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
+from .integrators import FAMILIES
+from .integrators import configure as configure_integrator
+
 if TYPE_CHECKING:
     import rebound
 
@@ -42,7 +45,6 @@ Row = Dict[str, Any]
 #: progress(done, total, row), called after each run.
 ProgressCallback = Callable[[int, int, Row], None]
 
-FAMILIES = ("pfvi", "ias15", "whfast", "leapfrog", "bs")
 #: The accuracy knob of each family, as the table and plot call it.
 KNOBS = {"pfvi": "epsilon", "ias15": "epsilon", "bs": "eps", "whfast": "steps/period",
          "leapfrog": "steps/period"}
@@ -125,25 +127,17 @@ def configure(sim: rebound.Simulation, scene: Scene, setting: Setting) -> None:
     """Sets the integrator of `sim` as `setting` asks."""
     opts = dict(setting.options)
     if setting.family == "pfvi":
-        sim.integrator = "pfvi"
-        sim.integrator.stages = int(opts.get("stages", 4))
-        sim.integrator.fitting = opts.get("fitting", "phase")
-        sim.integrator.step_control = opts.get("step_control", "reversible")
+        # dt: the cap on adaptive steps; the controller starts from it.
+        configure_integrator(sim, "pfvi", dt=scene.period / 10.0, stages=int(opts.get("stages", 4)),
+                             fitting=opts.get("fitting", "phase"),
+                             step_control=opts.get("step_control", "reversible"), epsilon=setting.value)
         scene.configure_pfvi(sim, opts.get("frequency", "curvature"))
-        sim.integrator.epsilon = setting.value
-        sim.dt = scene.period / 10.0  # the cap on adaptive steps; the controller starts from it
     elif setting.family == "ias15":
-        sim.integrator = "ias15"
-        sim.integrator.epsilon = setting.value
-        sim.dt = scene.period / 100.0  # IAS15's first trial step
+        configure_integrator(sim, "ias15", dt=scene.period / 100.0, epsilon=setting.value)  # dt: the first trial
     elif setting.family == "bs":
-        sim.integrator = "bs"
-        sim.integrator.eps_abs = setting.value
-        sim.integrator.eps_rel = setting.value
-        sim.dt = scene.period / 100.0
+        configure_integrator(sim, "bs", dt=scene.period / 100.0, eps=setting.value)
     else:
-        sim.integrator = setting.family
-        sim.dt = scene.period / setting.value
+        configure_integrator(sim, setting.family, dt=scene.period / setting.value)
 
 
 def _install_counter(sim: rebound.Simulation, scene: Scene, counter: List[int]) -> None:
@@ -337,44 +331,16 @@ class Results:
         return count(self.rows, "line")
 
     def to_dict(self) -> Dict[str, Any]:
-        from .units import REBOUND_UNITS
+        """Everything the sweep found, as JSON-ready data (report.results_dict)."""
+        from .report import results_dict
 
-        own = getattr(self.scene, "unit_names", True) is None
-        unit_names = ("the simulation's own",) * 3 if own else REBOUND_UNITS
-        return {"scene": self.scene.name, "params": self.scene.params, "description": self.scene.describe(),
-                "t_end": self.scene.t_end, "period": self.scene.period,
-                "units": {"length": unit_names[0], "time": unit_names[1], "mass": unit_names[2],
-                          "wall_s": "s"},
-                "reference": {k: v for k, v in self.reference.items() if k in ("how", "uncertainty")},
-                "repeats": self.repeats, "samples": self.samples, "workers": self.workers,
-                "scheduler": self.scheduler, "budget_s": self.budget, "settings": len(self.settings),
-                "finished": self.finished,
-                "interrupted": self.interrupted, "sweep_wall_s": self.wall_s, "rows": self.rows}
+        return results_dict(self)
 
     def table(self) -> Any:
-        """The rows as an astropy QTable, with Quantities: position error in AU
-        and km, wall time in s, the knob's step in yr for fixed-step runs."""
-        import astropy.units as u
-        from astropy.table import QTable
+        """The rows as an astropy QTable with Quantities (report.results_table)."""
+        from .report import results_table
 
-        ok = [r for r in self.rows if r["status"] == "ok"]
-        t = QTable()
-        t["line"] = [r["line"] for r in ok]
-        t["knob"] = [r["knob"] for r in ok]
-        t["value"] = [r["value"] for r in ok]
-        t["steps"] = [r["steps"] for r in ok]
-        t["force_evaluations"] = [r["force_evaluations"] for r in ok]
-        t["wall_time"] = [r["wall_s"] for r in ok] << u.s
-        t["energy_error_max"] = [r["energy_error_max"] for r in ok]
-        t["energy_error_final"] = [r["energy_error_final"] for r in ok]
-        errors = [r["position_error"] for r in ok]
-        if getattr(self.scene, "unit_names", True) is None:  # a custom simulation in its own units
-            t["position_error"] = errors
-        else:
-            t["position_error"] = errors << u.AU
-            t["position_error_km"] = t["position_error"].to(u.km)
-        return t
-
+        return results_table(self)
 
 def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int = 3, samples: int = 100,
         workers: Optional[int] = None, scheduler: Any = None,

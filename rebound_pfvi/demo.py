@@ -14,6 +14,7 @@ import time
 import rebound
 
 from . import INTEGRATOR_NAME  # noqa: F401  (registers "pfvi")
+from .integrators import configure as configure_integrator
 from .scenes import kepler_relative, orbit_elements
 
 M_PLANET = 1e-3
@@ -35,16 +36,13 @@ def exact_relative_position(sim0, t):
 
 def configure(sim, name, period, steps_per_orbit):
     if name.startswith("pfvi"):
-        sim.integrator = "pfvi"
-        sim.integrator.epsilon = 0.  # fixed steps of dt
-        sim.integrator.stages = 2  # the two-point scheme unless a test sets s
-        sim.integrator.fitting = name.split(":")[1]
-        sim.dt = period / steps_per_orbit
+        # fixed steps of dt; the two-point scheme
+        configure_integrator(sim, "pfvi", dt=period / steps_per_orbit, epsilon=0., stages=2,
+                             fitting=name.split(":")[1])
     elif name == "whfast":
-        sim.integrator = "whfast"
-        sim.dt = period / 100
+        configure_integrator(sim, "whfast", dt=period / 100)
     else:
-        sim.integrator = "ias15"
+        configure_integrator(sim, "ias15")
 
 
 def run_case(e, name, orbits, steps_per_orbit):

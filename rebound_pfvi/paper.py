@@ -18,6 +18,8 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
+from .integrators import configure as configure_integrator
+from .report import fmt
 from .scenes import kepler_relative, orbit_elements
 
 if TYPE_CHECKING:
@@ -53,11 +55,7 @@ def one_period(e: float, epsilon: float, fitting: str, stages: int = 2,
     sim = seed_problem(e)
     period = sim.particles[1].P
     E0 = _specific_energy(sim)
-    sim.integrator = "pfvi"
-    sim.integrator.fitting = fitting
-    sim.integrator.stages = stages
-    sim.integrator.step_control = step_control
-    sim.integrator.epsilon = epsilon
+    configure_integrator(sim, "pfvi", fitting=fitting, stages=stages, step_control=step_control, epsilon=epsilon)
     worst = 0.0
     # Step by step, so that the largest error is seen; the last step lands on
     # the period (REBOUND's exact_finish_time).
@@ -121,18 +119,14 @@ def figure1_rows(eccentricities: Sequence[float] = ECCENTRICITIES, epsilons: Seq
     return rows
 
 
-def _fmt(x, spec):
-    return "-" if x is None else format(x, spec)
-
-
 def figure1_table(rows: List[Row]) -> str:
     lines = ["| e | epsilon (phase) | phase: energy error | phase: steps | none: epsilon matched |"
              " none: energy error | none: steps | steps none / phase |",
              "|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(f"| {r['e']} | {r['epsilon']:.0e} | {r['phase_error']:.2e} | {r['phase_steps']} |"
-                     f" {_fmt(r['none_epsilon'], '.3e')} | {_fmt(r['none_error'], '.2e')} |"
-                     f" {_fmt(r['none_steps'], 'd')} | {_fmt(r['ratio'], '.2f')} |")
+                     f" {fmt(r['none_epsilon'], '.3e')} | {fmt(r['none_error'], '.2e')} |"
+                     f" {fmt(r['none_steps'], 'd')} | {fmt(r['ratio'], '.2f')} |")
     return "\n".join(lines)
 
 
@@ -235,12 +229,8 @@ counted.
 # Figures 2 and 3: the seed's long run at e = 0.95 and its curvature frequency.
 
 def _pfvi(sim, stages, epsilon, step_control, fitting="phase"):
-    sim.integrator = "pfvi"
-    sim.integrator.stages = stages
-    sim.integrator.fitting = fitting
-    sim.integrator.step_control = step_control
-    sim.integrator.epsilon = epsilon
-    sim.dt = sim.particles[1].P / 100.0
+    configure_integrator(sim, "pfvi", dt=sim.particles[1].P / 100.0, stages=stages, fitting=fitting,
+                         step_control=step_control, epsilon=epsilon)
 
 
 def curvature_frequency(p: rebound.Particle) -> float:

@@ -9,7 +9,10 @@ import platform
 from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Optional
 
 if TYPE_CHECKING:
+    import pathlib
+
     from .compare import Results, Row
+    from .stability import Report as StabilityReport
 
 #: Position errors (AU) at which the summary names the fastest run of each line.
 TARGETS = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)
@@ -19,7 +22,8 @@ COLUMNS = ("line", "knob", "value", "verdict", "verdict_detail", "status", "step
            "iterations_mean")
 
 
-def _fmt(value: Any, spec: str) -> str:
+def fmt(value: Any, spec: str = ".2g") -> str:
+    """A number for a table: "-" for None, inf and nan as they are."""
     if value is None:
         return "-"
     if isinstance(value, float) and not math.isfinite(value):
@@ -306,4 +310,116 @@ particle from its reference position at t_end (Kepler: of the relative position)
     with open(base + ".md", "w") as f:
         f.write(text)
     paths["md"] = base + ".md"
+    return paths
+
+
+def results_dict(results: Results) -> Dict[str, Any]:
+    """Everything a sweep found, as JSON-ready data."""
+    from .units import REBOUND_UNITS
+
+    own = getattr(results.scene, "unit_names", True) is None
+    unit_names = ("the simulation's own",) * 3 if own else REBOUND_UNITS
+    return {"scene": results.scene.name, "params": results.scene.params, "description": results.scene.describe(),
+            "t_end": results.scene.t_end, "period": results.scene.period,
+            "units": {"length": unit_names[0], "time": unit_names[1], "mass": unit_names[2],
+                      "wall_s": "s"},
+            "reference": {k: v for k, v in results.reference.items() if k in ("how", "uncertainty")},
+            "repeats": results.repeats, "samples": results.samples, "workers": results.workers,
+            "scheduler": results.scheduler, "budget_s": results.budget, "settings": len(results.settings),
+            "finished": results.finished,
+            "interrupted": results.interrupted, "sweep_wall_s": results.wall_s, "rows": results.rows}
+
+
+def results_table(results: Results) -> Any:
+    """The rows as an astropy QTable, with Quantities: position error in AU
+    and km, wall time in s, the knob's step in yr for fixed-step runs."""
+    import astropy.units as u
+    from astropy.table import QTable
+
+    ok = [r for r in results.rows if r["status"] == "ok"]
+    t = QTable()
+    t["line"] = [r["line"] for r in ok]
+    t["knob"] = [r["knob"] for r in ok]
+    t["value"] = [r["value"] for r in ok]
+    t["steps"] = [r["steps"] for r in ok]
+    t["force_evaluations"] = [r["force_evaluations"] for r in ok]
+    t["wall_time"] = [r["wall_s"] for r in ok] << u.s
+    t["energy_error_max"] = [r["energy_error_max"] for r in ok]
+    t["energy_error_final"] = [r["energy_error_final"] for r in ok]
+    errors = [r["position_error"] for r in ok]
+    if getattr(results.scene, "unit_names", True) is None:  # a custom simulation in its own units
+        t["position_error"] = errors
+    else:
+        t["position_error"] = errors << u.AU
+        t["position_error_km"] = t["position_error"].to(u.km)
+    return t
+
+
+# --- the stability report (rebound-pfvi stability) ---------------------------
+
+def stability_verdict_counts(report: StabilityReport) -> Dict[str, Dict[str, int]]:
+    """{integrator: {verdict: runs}} over every case of the report."""
+    from . import verdict
+
+    return verdict.count(report.rows, "integrator")
+
+
+def stability_markdown(report: StabilityReport, command: Optional[str] = None) -> str:
+    """The report as markdown: the verdicts counted per integrator, then one table per case."""
+    from . import verdict
+    from .stability import cases
+
+    lines = ["# Stability report: extreme cases", ""]
+    if command:
+        lines += [f"Produced by `{command}` in {report.wall_s:.0f} s (2 cores here); every run in its own "
+                  f"process with a budget of {report.budget:g} s of integration.", ""]
+    lines += ["## Verdicts", "",
+              "Each run's verdict: " + "; ".join(f"**{v}**: {verdict.MEANING[v]}" for v in verdict.VERDICTS)
+              + f". Tolerance unless a case says otherwise: {verdict.DEFAULT.describe()} (the reference's "
+              "distance at the time reached: the size of the orbit where the body is).", "",
+              verdict.markdown_counts(stability_verdict_counts(report)), ""]
+    lines += ["Columns: the verdict; what happened (the error against the tolerance, the refusal's message, or "
+              "the budget) and what the integrator counted; t reached as a fraction of the case's end; "
+              "relative energy error at the end and the largest over 100 checkpoints (for the parabola, "
+              "relative to |T0| + |V0|); largest position error against the reference at the time reached "
+              "(AU; for two-body cases the relative vector); steps; wall time.", ""]
+    by_case: Dict[str, List[Row]] = {}
+    for row in report.rows:
+        by_case.setdefault(row["case"], []).append(row)
+    for name, rows in by_case.items():
+        case = cases()[name]
+        ref = report.references.get(name, {})
+        lines += [f"## {name}", "", case.title + ".", ""]
+        how = ref.get("how", "")
+        if ref.get("uncertainty"):
+            how += f" = {ref['uncertainty']:.2g} AU"
+        tolerance = "" if case.tolerance == verdict.DEFAULT else f"Tolerance: {case.tolerance.describe()}. "
+        lines += [f"Reference: {how}. " + tolerance
+                  + (f"Fixed steps: {case.fixed_dt:.3g} yr (pfvi epsilon = 0, WHFast). " if case.fixed_dt else
+                     f"WHFast dt = {case.whfast_step:.3g} yr. ") + case.note, ""]
+        lines += ["| integrator | verdict | what happened | t reached | energy error (end / max) | position error "
+                  "[AU] | steps | wall s |", "|---|---|---|---|---|---|---|---|"]
+        for r in rows:
+            lines.append(f"| {r['integrator']} | {r.get('verdict', '-')} | {r['what_happened'].replace('|', '/')} | "
+                         f"{fmt(r['fraction'], '.3g')} | {fmt(r['energy_error'])} / "
+                         f"{fmt(r['energy_error_max'])} | {fmt(r['position_error'])} | {fmt(r['steps'], 'd')} | "
+                         f"{fmt(r['wall_s'], '.3g')} |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def write_stability(report: StabilityReport, directory: Any, command: Optional[str] = None) -> List[pathlib.Path]:
+    """stability.json and stability.md in `directory`; returns their paths."""
+    import json
+    import pathlib
+
+    directory = pathlib.Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    paths = [directory / "stability.json", directory / "stability.md"]
+    rows = [{k: v for k, v in r.items() if k != "positions"} for r in report.rows]
+    data = report.to_dict()
+    data["rows"] = rows
+    data["command"] = command
+    paths[0].write_text(json.dumps(data, indent=1, default=str))
+    paths[1].write_text(stability_markdown(report, command))
     return paths

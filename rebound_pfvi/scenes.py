@@ -41,7 +41,9 @@ REFERENCE_EPSILON = 1e-11
 REFERENCE_CHECK_EPSILON = 1e-10
 
 
-def _new_simulation():
+def new_simulation() -> rebound.Simulation:
+    """An empty simulation in the scenes' units (AU, yr, Msun; REBOUND's G),
+    with "pfvi" registered: what every scene and stability case builds on."""
     import rebound
 
     import rebound_pfvi  # noqa: F401  (registers "pfvi" in this process)
@@ -54,7 +56,7 @@ def _new_simulation():
 @functools.lru_cache(maxsize=None)
 def rebound_G() -> float:
     """G in AU^3 / (Msun yr^2), as REBOUND sets it: the one G of every scene."""
-    return _new_simulation().G
+    return new_simulation().G
 
 
 def orbit_elements(sim: rebound.Simulation, i: int = 1) -> Dict[str, float]:
@@ -193,7 +195,7 @@ class Kepler(Scene):
             raise ValueError(f"m={units.show(m)} is negative; the orbiter's mass must be >= 0")
 
     def build(self, counter: Counter = None) -> rebound.Simulation:
-        sim = _new_simulation()
+        sim = new_simulation()
         sim.add(m=self.mass)
         sim.add(m=self.m, a=self.a, e=self.e)
         sim.move_to_com()
@@ -251,7 +253,7 @@ class Comet(Scene):
         self.periods = _positive(_number(periods, "periods"), "periods")
 
     def build(self, counter: Counter = None) -> rebound.Simulation:
-        sim = _new_simulation()
+        sim = new_simulation()
         sim.add(m=1.0)
         # Jupiter's mass as the nominal GM ratio, its mean elements (J2000, rounded).
         sim.add(m=9.545942339693249e-4, a=5.2026, e=0.0484, inc=math.radians(1.304),
@@ -292,7 +294,7 @@ class Triple(Scene):
         self.periods = _positive(_number(periods, "periods"), "periods")
 
     def build(self, counter: Counter = None) -> rebound.Simulation:
-        sim = _new_simulation()
+        sim = new_simulation()
         sim.add(m=1.0)
         sim.add(m=0.5, a=self.a_inner, e=self.e)
         sim.add(m=0.3, a=self.a_outer, e=0.2, inc=math.radians(30.0), omega=math.radians(60.0))
@@ -342,7 +344,7 @@ class Oscillator(Scene):
         self.periods = _positive(_number(periods, "periods"), "periods")
 
     def build(self, counter: Counter = None) -> rebound.Simulation:
-        sim = _new_simulation()
+        sim = new_simulation()
         sim.gravity = "none"
         sim.add(m=1.0, x=self.amplitude, vy=0.5 * self.omega * self.amplitude)
         w2 = self.omega * self.omega

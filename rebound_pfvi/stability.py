@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from . import scenes, verdict
+from .integrators import configure as configure_integrator
 
 if TYPE_CHECKING:
     import pathlib
@@ -81,7 +82,7 @@ def _G():
 
 def _two_body(e, m=1e-3, a=1.0, f=math.pi, mass=1.0):
     def build():
-        sim = scenes._new_simulation()
+        sim = scenes.new_simulation()
         sim.add(m=mass)
         sim.add(m=m, a=a, e=e, f=f)
         sim.move_to_com()
@@ -119,7 +120,7 @@ def _conic(q, e, f0, m=1e-3, mass=1.0):
         p = q * (1.0 + e)
         r = p / (1.0 + e * math.cos(f0))
         k = math.sqrt(G * (mass + m) / p)
-        sim = scenes._new_simulation()
+        sim = scenes.new_simulation()
         sim.add(m=mass)
         sim.add(m=m, x=r * math.cos(f0), y=r * math.sin(f0), vx=-k * math.sin(f0), vy=k * (e + math.cos(f0)))
         sim.move_to_com()
@@ -175,7 +176,7 @@ def _radial_infall():
     t_stop = scale * (E_stop - math.sin(E_stop) - math.pi)
 
     def build():
-        sim = scenes._new_simulation()
+        sim = scenes.new_simulation()
         sim.add(m=1.0)
         sim.add(m=m, x=r0)
         sim.move_to_com()
@@ -194,7 +195,7 @@ def _radial_infall():
 def _pythagorean():
     """Burrau's problem: masses 3, 4, 5 at rest at the corners of a 3-4-5 triangle."""
     def build():
-        sim = scenes._new_simulation()
+        sim = scenes.new_simulation()
         for m, x, y in ((3.0, 1.0, 3.0), (4.0, -2.0, -1.0), (5.0, 1.0, -1.0)):
             sim.add(m=m, x=x, y=y)
         sim.move_to_com()
@@ -212,7 +213,7 @@ def _jupiter_encounter():
 
     def build():
         G = _G()
-        sim = scenes._new_simulation()
+        sim = scenes.new_simulation()
         sim.add(m=1.0)
         sim.add(m=1e-3, a=1.0, e=0.0)
         v = math.sqrt(G)
@@ -239,7 +240,7 @@ def _stiff_binary():
     a_out = (_G() * 1.1 * (1e4 * P_in / (2.0 * math.pi)) ** 2) ** (1.0 / 3.0)
 
     def build():
-        sim = scenes._new_simulation()
+        sim = scenes.new_simulation()
         sim.add(m=0.5)
         sim.add(m=0.5, a=a_in, e=e_in)
         sim.add(m=0.1, a=a_out, e=0.3, inc=0.5)
@@ -333,22 +334,15 @@ def default_configs(integrators: Sequence[str] = ("pfvi", "ias15", "whfast"), fi
 
 def configure(sim: rebound.Simulation, case: Case, config: Config) -> None:
     if config.family == "pfvi":
-        sim.integrator = "pfvi"
-        sim.integrator.fitting = config.fitting
-        sim.integrator.stages = config.stages
-        if case.fixed_dt is not None:
-            sim.integrator.epsilon = 0.0
-            sim.dt = case.fixed_dt
-        else:
-            sim.integrator.epsilon = config.epsilon
-            sim.dt = case.time_scale / 10.0  # the cap on adaptive steps
+        fixed = case.fixed_dt is not None
+        # dt: the fixed step, or the cap on adaptive steps
+        configure_integrator(sim, "pfvi", dt=case.fixed_dt if fixed else case.time_scale / 10.0,
+                             fitting=config.fitting, stages=config.stages, epsilon=0.0 if fixed else config.epsilon)
     elif config.family == "ias15":
-        sim.integrator = "ias15"
-        sim.integrator.epsilon = config.epsilon
-        sim.dt = case.fixed_dt if case.fixed_dt is not None else case.time_scale / 100.0
+        configure_integrator(sim, "ias15", dt=case.fixed_dt if case.fixed_dt is not None else case.time_scale / 100.0,
+                             epsilon=config.epsilon)
     else:
-        sim.integrator = "whfast"
-        sim.dt = case.whfast_step
+        configure_integrator(sim, "whfast", dt=case.whfast_step)
 
 
 # --- one run -------------------------------------------------------------------
@@ -645,74 +639,3 @@ def run_all(case_names: Optional[Sequence[str]] = None, configs: Optional[Sequen
         row["what_happened"] = what_happened(row)
         rows.append(row)
     return Report(rows, references, budget, time.perf_counter() - tick)
-
-
-def _fmt(x, spec=".2g"):
-    if x is None:
-        return "-"
-    if isinstance(x, float) and not math.isfinite(x):
-        return str(x)
-    return format(x, spec)
-
-
-def verdict_counts(report: Report) -> Dict[str, Dict[str, int]]:
-    """{integrator: {verdict: runs}} over every case of the report."""
-    return verdict.count(report.rows, "integrator")
-
-
-def markdown(report: Report, command: Optional[str] = None) -> str:
-    """The report as markdown: the verdicts counted per integrator, then one table per case."""
-    lines = ["# Stability report: extreme cases", ""]
-    if command:
-        lines += [f"Produced by `{command}` in {report.wall_s:.0f} s (2 cores here); every run in its own "
-                  f"process with a budget of {report.budget:g} s of integration.", ""]
-    lines += ["## Verdicts", "",
-              "Each run's verdict: " + "; ".join(f"**{v}**: {verdict.MEANING[v]}" for v in verdict.VERDICTS)
-              + f". Tolerance unless a case says otherwise: {verdict.DEFAULT.describe()} (the reference's "
-              "distance at the time reached: the size of the orbit where the body is).", "",
-              verdict.markdown_counts(verdict_counts(report)), ""]
-    lines += ["Columns: the verdict; what happened (the error against the tolerance, the refusal's message, or "
-              "the budget) and what the integrator counted; t reached as a fraction of the case's end; "
-              "relative energy error at the end and the largest over 100 checkpoints (for the parabola, "
-              "relative to |T0| + |V0|); largest position error against the reference at the time reached "
-              "(AU; for two-body cases the relative vector); steps; wall time.", ""]
-    by_case: Dict[str, List[Row]] = {}
-    for row in report.rows:
-        by_case.setdefault(row["case"], []).append(row)
-    for name, rows in by_case.items():
-        case = cases()[name]
-        ref = report.references.get(name, {})
-        lines += [f"## {name}", "", case.title + ".", ""]
-        how = ref.get("how", "")
-        if ref.get("uncertainty"):
-            how += f" = {ref['uncertainty']:.2g} AU"
-        tolerance = "" if case.tolerance == verdict.DEFAULT else f"Tolerance: {case.tolerance.describe()}. "
-        lines += [f"Reference: {how}. " + tolerance
-                  + (f"Fixed steps: {case.fixed_dt:.3g} yr (pfvi epsilon = 0, WHFast). " if case.fixed_dt else
-                     f"WHFast dt = {case.whfast_step:.3g} yr. ") + case.note, ""]
-        lines += ["| integrator | verdict | what happened | t reached | energy error (end / max) | position error "
-                  "[AU] | steps | wall s |", "|---|---|---|---|---|---|---|---|"]
-        for r in rows:
-            lines.append(f"| {r['integrator']} | {r.get('verdict', '-')} | {r['what_happened'].replace('|', '/')} | "
-                         f"{_fmt(r['fraction'], '.3g')} | {_fmt(r['energy_error'])} / "
-                         f"{_fmt(r['energy_error_max'])} | {_fmt(r['position_error'])} | {_fmt(r['steps'], 'd')} | "
-                         f"{_fmt(r['wall_s'], '.3g')} |")
-        lines.append("")
-    return "\n".join(lines)
-
-
-def write(report: Report, directory: Any, command: Optional[str] = None) -> List[pathlib.Path]:
-    """stability.json and stability.md in `directory`; returns their paths."""
-    import json
-    import pathlib
-
-    directory = pathlib.Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
-    paths = [directory / "stability.json", directory / "stability.md"]
-    rows = [{k: v for k, v in r.items() if k != "positions"} for r in report.rows]
-    data = report.to_dict()
-    data["rows"] = rows
-    data["command"] = command
-    paths[0].write_text(json.dumps(data, indent=1, default=str))
-    paths[1].write_text(markdown(report, command))
-    return paths

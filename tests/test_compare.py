@@ -9,6 +9,8 @@ import pytest
 from rebound_pfvi import compare, report, scenes
 from rebound_pfvi.__main__ import main
 
+pytestmark = pytest.mark.slow  # runners, CLI and pages: skipped by `pytest -m "not slow"`
+
 
 @pytest.mark.parametrize("e", [0.0, 0.5, 0.9, 0.95, 0.99])
 def test_kepler_reference_agrees_with_tight_ias15(e):

@@ -3,6 +3,10 @@ import json
 import pathlib
 import runpy
 
+import pytest
+
+pytestmark = pytest.mark.slow  # runners, CLI and pages: skipped by `pytest -m "not slow"`
+
 EXAMPLES = pathlib.Path(__file__).resolve().parent.parent / "examples"
 
 

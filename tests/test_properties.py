@@ -72,6 +72,7 @@ def finite(sim):
                for f in ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az", "m"))
 
 
+@pytest.mark.slow
 @settings(max_examples=1000, **SETTINGS)
 @given(central=log_uniform(-3, 1), orbits=st.lists(orbit, min_size=1, max_size=3, unique_by=lambda o: (o["a"], o["f"])), opts=options,
        dt_fraction=log_uniform(-5, 0), com=st.booleans(), n_steps=st.integers(1, 12),

@@ -10,6 +10,8 @@ import pytest
 
 from rebound_pfvi import stability
 
+pytestmark = pytest.mark.slow  # runners, CLI and pages: skipped by `pytest -m "not slow"`
+
 
 def test_every_listed_case_builds_and_is_finite():
     for name, case in stability.cases().items():

@@ -9,6 +9,8 @@ import pytest
 
 import rebound_pfvi
 
+pytestmark = pytest.mark.slow  # runners, CLI and pages: skipped by `pytest -m "not slow"`
+
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 #: The modules whose every public function must be fully annotated.
 TYPED = ("compare.py", "report.py", "scenes.py", "stability.py", "units.py", "__main__.py", "paper.py", "verdict.py")

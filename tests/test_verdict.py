@@ -6,6 +6,8 @@ import pytest
 
 from rebound_pfvi import compare, scenes, stability, verdict
 
+pytestmark = pytest.mark.slow  # runners, CLI and pages: skipped by `pytest -m "not slow"`
+
 
 def test_judge_separates_accurate_from_inaccurate_at_the_tolerance():
     assert verdict.judge(1e-8, 1e-6) == (verdict.ACCURATE, "energy error 1e-08, position error 1e-06 of the distance")

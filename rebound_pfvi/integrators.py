@@ -1,0 +1,47 @@
+"""One way to set up an integrator from (family, options): the comparisons,
+the stability cases, the paper's figures, the examples and the benchmarks all
+configure their integrators here.
+
+    configure(sim, "pfvi", dt=0.01, stages=4, fitting="phase", epsilon=1e-8)
+    configure(sim, "ias15", epsilon=1e-9)
+    configure(sim, "bs", eps=1e-10)          # BS's eps_abs and eps_rel
+    configure(sim, "whfast", dt=1e-3)
+
+Options are the integrator's own fields (``help(sim.integrator)``), set after
+``sim.integrator = family``; ``dt`` is ``sim.dt``. An unknown family or option
+raises ValueError naming it; a bad value is the integrator's to refuse (pfvi's
+when the next step starts).
+"""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    import rebound
+
+#: The integrator families the comparisons know.
+FAMILIES = ("pfvi", "ias15", "whfast", "leapfrog", "bs")
+
+
+def _fields(sim: rebound.Simulation) -> set:
+    """The settable fields of sim's integrator (REBOUND's field descriptors)."""
+    descriptors = sim.integrator.callbacks.field_descriptor_list
+    return {fd.name.decode() for fd in descriptors} if descriptors else set()
+
+
+def configure(sim: rebound.Simulation, family: str, dt: float | None = None, **options: Any) -> rebound.Simulation:
+    """Sets ``sim.integrator = family`` and then each option; returns sim."""
+    if family not in FAMILIES:
+        raise ValueError(f"family={family!r} is not an integrator family; allowed: {', '.join(FAMILIES)}")
+    sim.integrator = family
+    if family == "bs" and "eps" in options:
+        eps = options.pop("eps")
+        options.update(eps_abs=eps, eps_rel=eps)
+    fields = _fields(sim)
+    for name, value in options.items():
+        if name not in fields:
+            raise ValueError(f"{name}={value!r} is not an option of {family}; it has: {', '.join(sorted(fields))}")
+        setattr(sim.integrator, name, value)
+    if dt is not None:
+        sim.dt = dt
+    return sim
