@@ -52,20 +52,71 @@ GRACE_SECONDS = 60.0
 
 
 @dataclass
-class Case:
-    """One extreme case: how to build it, how long to run it, how to judge it."""
+class Case(scenes.Scene):
+    """One extreme case, a scene like those of ``compare``: how to build it,
+    how long to run it, how to judge it."""
 
-    name: str
-    title: str
-    build: Callable[[], rebound.Simulation]  # a new simulation at t = 0
-    t_end: float
+    name: str = field()  # required (field(): the scenes' class attribute `name` is no default here)
+    title: str = field()
+    builder: Callable[[], rebound.Simulation]  # a new simulation at t = 0
+    duration: float  # how long to run it (t_end)
     time_scale: float  # the shortest dynamical time (period); sets first steps
-    reference: str = "ias15"  # or "kepler" (exact two-body) or "radial" (exact infall)
+    reference_kind: str = "ias15"  # or "kepler" (exact two-body) or "radial" (exact infall)
     fixed_dt: Optional[float] = None  # fixed steps for pfvi (epsilon = 0) and WHFast
     whfast_dt: Optional[float] = None  # default time_scale / 100
     note: str = ""
     exact: Optional[Callable[[float], Vector]] = None  # callable(t) -> relative position (x, y, z) for exact references
     tolerance: verdict.Tolerance = verdict.DEFAULT  # what "accurate" means for this case
+
+    families = ("pfvi", "ias15", "whfast")
+
+    def build(self, counter: scenes.Counter = None) -> rebound.Simulation:
+        # counter: unused, as in every scene whose force is REBOUND's gravity
+        # (counts_own_forces False: compare counts through additional_forces).
+        return self.builder()
+
+    @property
+    def params(self) -> Dict[str, Any]:
+        return {"case": self.name, "t_end": self.duration, "time_scale": self.time_scale,
+                "reference": self.reference_kind, "fixed_dt": self.fixed_dt}
+
+    @property
+    def period(self) -> float:
+        return self.time_scale
+
+    @property
+    def periods(self) -> float:  # type: ignore[override]
+        return self.duration / self.time_scale
+
+    @property
+    def t_end(self) -> float:
+        return self.duration
+
+    def describe(self) -> str:
+        return self.title
+
+    @property
+    def slug(self) -> str:
+        return self.name
+
+    def reference(self) -> Dict[str, Any]:
+        """As a scene's: every particle's position at t_end (IAS15), or for an
+        exact case the relative position of body 1 about body 0."""
+        if self.exact is None:
+            return super().reference()
+        return {"relative": self.exact(self.duration), "uncertainty": 0.0, "how": "exact"}
+
+    def position_error(self, sim: rebound.Simulation, reference: Dict[str, Any]) -> float:
+        if "relative" not in reference:
+            return super().position_error(sim, reference)
+        d = sim.particles[1] - sim.particles[0]
+        return math.dist((d.x, d.y, d.z), reference["relative"])
+
+    def relative_position_error(self, sim: rebound.Simulation, reference: Dict[str, Any]) -> Optional[float]:
+        if "relative" not in reference:
+            return super().relative_position_error(sim, reference)
+        d = sim.particles[1] - sim.particles[0]
+        return verdict.relative_vector_error((d.x, d.y, d.z), reference["relative"])
 
     @property
     def whfast_step(self) -> float:
@@ -108,7 +159,7 @@ def _period(a, mass):
 def _kepler_case(name, title, e, periods, m=1e-3, fixed_dt=None, note="", tolerance=verdict.DEFAULT):
     build = _two_body(e, m=m)
     period = _period(1.0, 1.0 + m)
-    return Case(name, title, build, periods * period, period, reference="kepler", note=note,
+    return Case(name, title, build, periods * period, period, reference_kind="kepler", note=note,
                 fixed_dt=(fixed_dt * period if fixed_dt is not None else None), exact=_kepler_exact(build),
                 tolerance=tolerance)
 
@@ -188,7 +239,7 @@ def _radial_infall():
     free_fall = scale * math.pi
     return Case("radial-infall", f"radial infall of a Jupiter-mass body from rest at {r0:g} AU (zero angular momentum, curvature "
                 f"frequency 0), stopped at r = {r_stop:g} AU, {t_stop / free_fall:.4f} of the free-fall time",
-                build, t_stop, 2.0 * math.pi * math.sqrt(r_stop**3 / G), reference="radial", exact=exact,
+                build, t_stop, 2.0 * math.pi * math.sqrt(r_stop**3 / G), reference_kind="radial", exact=exact,
                 note="The last hundredth of the fall is left out: the collision itself is a singularity.")
 
 
@@ -433,7 +484,7 @@ def reference_positions(case_name: str, t: float, epsilon: float = scenes.REFERE
 
 def position_error(case: Case, row: Row, reference: Any) -> float:
     positions = row["positions"]
-    if case.reference in ("kepler", "radial"):
+    if case.reference_kind in ("kepler", "radial"):
         d = [positions[1][k] - positions[0][k] for k in range(3)]
         return math.dist(d, reference)
     return max(math.dist(p, q) for p, q in zip(positions, reference))
@@ -443,7 +494,7 @@ def relative_position_error(case: Case, row: Row, reference: Any) -> float:
     """The position error the verdict is judged by: relative to each body's
     reference distance from particle 0 (see :mod:`rebound_pfvi.verdict`)."""
     positions = row["positions"]
-    if case.reference in ("kepler", "radial"):
+    if case.reference_kind in ("kepler", "radial"):
         d = [positions[1][k] - positions[0][k] for k in range(3)]
         return verdict.relative_vector_error(d, reference)
     return verdict.relative_position_error(positions, reference)
@@ -557,7 +608,7 @@ class Report:
     def to_dict(self) -> Dict[str, Any]:
         return {"budget_s": self.budget, "wall_s": self.wall_s, "rows": self.rows,
                 "references": self.references,
-                "cases": {name: {"title": c.title, "t_end": c.t_end, "reference": c.reference,
+                "cases": {name: {"title": c.title, "t_end": c.t_end, "reference": c.reference_kind,
                                  "fixed_dt": c.fixed_dt, "whfast_dt": c.whfast_step, "note": c.note}
                           for name, c in cases().items() if name in self.references}}
 
@@ -598,7 +649,7 @@ def run_all(case_names: Optional[Sequence[str]] = None, configs: Optional[Sequen
     configs = configs or default_configs()
     tick = time.perf_counter()
     references = {}
-    ref_jobs = [(_reference_pair, (n, table[n].t_end)) for n in names if table[n].reference == "ias15"]
+    ref_jobs = [(_reference_pair, (n, table[n].t_end)) for n in names if table[n].reference_kind == "ias15"]
     for (_, (name, _t)), outcome in zip(ref_jobs, run_isolated(ref_jobs, workers)):
         if outcome[0] != "ok":
             raise RuntimeError(f"the IAS15 reference of case {name} failed: {outcome}")
@@ -607,8 +658,8 @@ def run_all(case_names: Optional[Sequence[str]] = None, configs: Optional[Sequen
                             "how": f"IAS15 epsilon {scenes.REFERENCE_EPSILON:g}; uncertainty: distance to "
                                    f"epsilon {scenes.REFERENCE_CHECK_EPSILON:g}"}
     for name in names:
-        if table[name].reference != "ias15":
-            references[name] = {"uncertainty": 0.0, "how": "exact" if table[name].reference == "kepler"
+        if table[name].reference_kind != "ias15":
+            references[name] = {"uncertainty": 0.0, "how": "exact" if table[name].reference_kind == "kepler"
                                 else "exact (radial Kepler equation)"}
     jobs = [(run, (n, c, budget)) for n in names for c in configs]
     outcomes = run_isolated(jobs, workers, hard_limits=[budget + GRACE_SECONDS] * len(jobs), progress=progress)
@@ -624,9 +675,9 @@ def run_all(case_names: Optional[Sequence[str]] = None, configs: Optional[Sequen
                    "positions": None, "finite": False,
                    "status": _failed_status(outcome)}
         if row.get("positions") is not None and row["finite"]:
-            if case.reference == "ias15" and row["t"] != case.t_end:
+            if case.reference_kind == "ias15" and row["t"] != case.t_end:
                 reference = reference_positions(name, row["t"])
-            elif case.reference == "ias15":
+            elif case.reference_kind == "ias15":
                 reference = references[name]["positions"]
             else:
                 assert case.exact is not None, f"case {name}: an exact reference needs exact(t)"

@@ -145,3 +145,17 @@ def test_cli_progress_bar_and_failed_runs_in_full_at_the_end(tmp_path):
     for line in refusals:  # the whole message, to its last word
         assert " s=4: refused: pfvi: the 4-stage solve did not converge" in line
         assert line.endswith("step not taken, state restored. Lower dt."), line
+
+
+def test_a_stability_case_is_a_scene_compare_can_sweep():
+    from rebound_pfvi import compare
+
+    case = stability.cases()["kepler-e0.99"]
+    assert case.t_end == case.duration and case.describe() == case.title and case.slug == "kepler-e0.99"
+    settings = [compare.Setting("ias15", 1e-9), compare.Setting("pfvi", 1e-8, (("stages", 4),))]
+    results = compare.run(case, settings, repeats=1, samples=10, workers=1)
+    rows = {r["family"]: r for r in results.rows}
+    assert results.reference["how"] == "exact"
+    # The exact reference: IAS15 to round-off, pfvi at epsilon 1e-8 within the verdict's tolerance.
+    assert rows["ias15"]["position_error"] < 1e-9
+    assert rows["ias15"]["verdict"] == rows["pfvi"]["verdict"] == "accurate"
