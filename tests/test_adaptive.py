@@ -192,12 +192,7 @@ def test_reversible_trials_start_from_the_last_trials_stages(stages, e):
     # 2 orbits a taken step needed 3.4-4.1 rounds of stage forces and a step
     # 52.7-53.0 (s = 4) or 78.1-78.8 (s = 6) force evaluations; now 1.9-2.2
     # rounds and 42.1-42.2 or 55.6-56.7 evaluations (same steps, same trials).
-    sim = rebound.Simulation()
-    sim.add(m=1.0)
-    sim.add(m=1e-3, a=1.0, e=e)
-    sim.move_to_com()
-    sim.integrator = "pfvi"
-    sim.integrator.stages = stages
+    sim = eccentric(e=e, stages=stages, step_control="reversible")  # the defaults but s
     sim.integrate(2 * sim.particles[1].P)
     assert sim.integrator.iterations_mean <= 2.4
     assert sim.integrator.n_force_evaluations / sim.integrator.n_steps < {4: 47, 6: 62}[stages]
