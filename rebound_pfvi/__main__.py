@@ -13,7 +13,7 @@ import time
 # Scene parameters: option -> (scene keyword, kind of quantity, scenes that take it, help).
 SCENE_OPTIONS = {
     "--e": ("e", "number", ("kepler", "comet", "triple"), "eccentricity (triple: of the inner binary)"),
-    "--periods": ("periods", "number", ("kepler", "comet", "triple", "oscillator"),
+    "--periods": ("periods", "number", ("kepler", "comet", "triple", "oscillator", "mercury-gr"),
                   "length of the run in periods (comet: of the comet; triple: of the outer orbit)"),
     "--a": ("a", "length", ("kepler", "comet"), 'semi-major axis, e.g. "1 AU" or "1.5e8 km"'),
     "--mass": ("mass", "mass", ("kepler",), 'central mass, e.g. "1 Msun"'),
@@ -108,7 +108,7 @@ def build_parser():
         "compare", help="error against run time: pfvi, IAS15, WHFast, LEAPFROG, BS on a scene",
         description="Sweeps every integrator's accuracy knob on a scene and writes <scene>.md (tables), "
                     ".json, .csv and .png (work-precision diagram) to --output.")
-    compare.add_argument("--scene", default="kepler", choices=("kepler", "comet", "triple", "oscillator"),
+    compare.add_argument("--scene", default="kepler", choices=("kepler", "comet", "triple", "oscillator", "mercury-gr"),
                          help="default kepler (e = 0.95, 100 periods)")
     for option, (_, kind, scenes, text) in SCENE_OPTIONS.items():
         compare.add_argument(option, type=_number(kind) if kind == "number" else _quantity(kind), default=None,
