@@ -15,7 +15,7 @@ from typing import Any, Dict, List, Optional, TextIO
 # Scene parameters: option -> (scene keyword, kind of quantity, scenes that take it, help).
 SCENE_OPTIONS = {
     "--e": ("e", "number", ("kepler", "comet", "triple"), "eccentricity (triple: of the inner binary)"),
-    "--periods": ("periods", "number", ("kepler", "comet", "triple", "oscillator"),
+    "--periods": ("periods", "number", ("kepler", "comet", "triple", "oscillator", "mercury-gr"),
                   "length of the run in periods (comet: of the comet; triple: of the outer orbit)"),
     "--a": ("a", "length", ("kepler", "comet"), 'semi-major axis, e.g. "1 AU" or "1.5e8 km"'),
     "--mass": ("mass", "mass", ("kepler",), 'central mass, e.g. "1 Msun"'),
@@ -136,7 +136,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Sweeps every integrator's accuracy knob on a scene and writes <scene>.md (who is fastest "
                     "at each accuracy and why, a verdict on every run, the tables), .json, .csv and .png "
                     "(work-precision diagram) to --output.")
-    compare.add_argument("--scene", default="comet", choices=("kepler", "comet", "triple", "oscillator"),
+    compare.add_argument("--scene", default="comet", choices=("kepler", "comet", "triple", "oscillator", "mercury-gr"),
                          help="default comet (Sun, Jupiter and an e = 0.95 comet, 3 comet periods: no "
                               "integrator is exact on it); kepler: two bodies, e = 0.95, 100 periods")
     for option, (_, kind, scenes, text) in SCENE_OPTIONS.items():

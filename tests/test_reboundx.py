@@ -1,0 +1,117 @@
+"""REBOUNDx forces with pfvi (issue 18, item 7): Mercury with REBOUNDx's
+velocity-dependent "gr" force against IAS15, and the scene `mercury-gr`.
+
+The tests that need reboundx are skipped without it (the `reboundx` extra);
+the first two run everywhere. `pytest -k reboundx` selects this file.
+"""
+import json
+import math
+import subprocess
+import sys
+
+import pytest
+
+from rebound_pfvi import compare, scenes
+from rebound_pfvi.__main__ import main
+
+
+def test_missing_reboundx_names_the_extra(monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "reboundx", None)  # import reboundx now fails
+    with pytest.raises(ImportError, match=r"rebound_pfvi\[reboundx\]"):
+        scenes.MercuryGR()
+    with pytest.raises(SystemExit) as stop:
+        main(["compare", "--scene", "mercury-gr"])
+    assert stop.value.code == 2
+    assert 'pip install "rebound_pfvi[reboundx]"' in capsys.readouterr().err
+
+
+def test_import_does_not_import_reboundx():
+    code = ("import sys, rebound_pfvi, rebound_pfvi.scenes, rebound_pfvi.compare, rebound_pfvi.__main__ as cli; "
+            "cli.build_parser(); print(sorted(m for m in ('reboundx', 'astropy', 'matplotlib') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-P", "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
+
+
+def _advance(integrator, epsilon, gr=True, velocity_dependent=None):
+    """Perihelion advance of Mercury over the scene's 415 orbits, in rad."""
+    scene = scenes.MercuryGR()
+    sim = scene.build()
+    if not gr:  # the same simulation, Newtonian
+        sim = scenes.new_simulation()
+        sim.add(m=1.0)
+        sim.add(m=scene.MASS, a=scene.A, e=scene.E)
+        sim.move_to_com()
+    sim.integrator = integrator
+    sim.integrator.epsilon = epsilon
+    sim.dt = scene.period / (10.0 if integrator == "pfvi" else 100.0)
+    if velocity_dependent is not None:
+        sim.force_is_velocity_dependent = velocity_dependent
+    start = scene.perihelion_longitude(sim)
+    sim.integrate(scene.t_end)
+    return math.remainder(scene.perihelion_longitude(sim) - start, 2.0 * math.pi)
+
+
+def test_pfvi_with_reboundx_gr_advances_perihelion_as_ias15():
+    pytest.importorskip("reboundx")
+    assert scenes.MercuryGR().build().force_is_velocity_dependent == 1  # REBOUNDx sets it for "gr"
+    ias15 = _advance("ias15", 1e-9)
+    # 43 arcsec/century: 6 pi G (M + m) / (c^2 a (1 - e^2)) per orbit. The run
+    # ends at perihelion after whole orbits, where the osculating elements'
+    # short-period terms are those of the start: measured 3.4e-6 relative.
+    scene, c = scenes.MercuryGR(), scenes.SPEED_OF_LIGHT_AU_YR
+    textbook = (6 * math.pi * scenes.rebound_G() * (1 + scene.MASS) / (c * c * scene.A * (1 - scene.E**2))
+                * scene.periods)
+    assert ias15 == pytest.approx(textbook, rel=1e-4)
+    assert abs(_advance("ias15", 1e-9, gr=False)) < 1e-13  # IAS15 adds no precession of its own
+    # pfvi at epsilon 1e-8 (s = 4, "phase"): measured 3.55e-10 rad from IAS15,
+    # 1.7e-6 of the advance. That difference is pfvi's own (Newtonian)
+    # precession at this tolerance, the same with the force off (measured
+    # -3.55e-10 rad); gr's part alone equals IAS15's to 5e-14 rad (measured).
+    # Tolerances: about 3 times and 20 times the measured differences.
+    pfvi = _advance("pfvi", 1e-8)
+    assert abs(pfvi - ias15) < 1e-9
+    newtonian = _advance("pfvi", 1e-8, gr=False)
+    assert abs((pfvi - newtonian) - ias15) < 1e-12
+    # The check can fail: told that the force is not velocity dependent,
+    # pfvi evaluates "gr" with predicted velocities and gr's part is
+    # 4.4e-8 rad off (measured).
+    wrong = _advance("pfvi", 1e-8, velocity_dependent=0)
+    assert abs((wrong - newtonian) - ias15) > 1e-8
+
+
+# REBOUNDx warns that WHFast takes a velocity-dependent force approximately;
+# the comparison shows how much (the WHFast rows).
+@pytest.mark.filterwarnings("ignore:.*velocity-dependent force to WHFAST:RuntimeWarning")
+def test_mercury_gr_compare_short_run_reboundx(tmp_path):
+    pytest.importorskip("reboundx")
+    out = tmp_path / "results"
+    code = main(["compare", "--scene", "mercury-gr", "--periods", "10", "--repeats", "1", "--samples", "4",
+                 "--workers", "1", "--output", str(out)])
+    assert code == 0
+    data = json.loads((out / "mercury-gr.json").read_text())
+    rows = data["rows"]
+    assert data["finished"] == data["settings"] == len(compare.default_settings(scenes.MercuryGR()))
+    assert {r["family"] for r in rows if r["status"] == "ok"} == set(compare.FAMILIES)
+    ok = [r for r in rows if r["status"] == "ok"]
+    best = {f: min(r["position_error"] for r in ok if r["family"] == f) for f in compare.FAMILIES}
+    assert best["ias15"] < 1e-10 and best["pfvi"] < 1e-8 and best["bs"] < 1e-8
+    for row in rows:
+        if row["family"] == "pfvi" and row["status"] == "ok":
+            # The scene's counting wrapper around REBOUNDx's force sees every evaluation pfvi counts.
+            assert row["force_evaluations"] == row["pfvi_force_evaluations"]
+    # The energy is REBOUNDx's "gr" Hamiltonian, which IAS15 conserves to round-off.
+    assert min(r["energy_error_max"] for r in rows if r["family"] == "ias15") < 1e-13
+    assert "Mercury with REBOUNDx gr" in (out / "mercury-gr.md").read_text()
+
+
+def test_counting_wrapper_leaves_the_run_bit_identical_reboundx():
+    pytest.importorskip("reboundx")
+    scene = scenes.MercuryGR(periods=2)
+    runs = []
+    for counter in (None, [0]):
+        sim = scene.build(counter=counter)
+        compare.configure(sim, scene, compare.Setting("pfvi", 1e-7))
+        sim.integrate(scene.t_end)
+        runs.append([(p.x, p.y, p.vx, p.vy) for p in sim.particles])
+    assert runs[0] == runs[1]
+    assert counter[0] == sim.integrator.n_force_evaluations > 0
