@@ -288,14 +288,17 @@ static void pfvi_report(struct reb_simulation* r, const struct pfvi_state* st){
 }
 
 // Whether value is one of an option's values; if not, says which are.
+// (Checked at every step: the message is built only on failure.)
 static int pfvi_enum_valid(struct reb_simulation* r, const char* field, int value,
         const struct reb_binarydata_enum_descriptor* values){
-    char allowed[REB_STRING_SIZE_MAX] = "";
-    size_t used = 0;
     for (const struct reb_binarydata_enum_descriptor* d=values; d->name[0]; d++){
         if (d->value == value){
             return 1;
         }
+    }
+    char allowed[REB_STRING_SIZE_MAX] = "";
+    size_t used = 0;
+    for (const struct reb_binarydata_enum_descriptor* d=values; d->name[0]; d++){
         const int n = snprintf(allowed + used, sizeof(allowed) - used, "%s'%s'", used ? ", " : "", d->name);
         used = (n > 0 && used + (size_t)n < sizeof(allowed)) ? used + (size_t)n : used;
     }
