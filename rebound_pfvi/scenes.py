@@ -481,7 +481,7 @@ def _plain(value: Any, name: str) -> float:
     return _number(value, name)
 
 
-SCENES = {cls.name: cls for cls in (Kepler, Comet, Triple, Oscillator)}
+SCENES: Dict[str, type] = {cls.name: cls for cls in (Kepler, Comet, Triple, Oscillator)}
 
 
 def make(name: str, **params: Any) -> Scene:
@@ -500,7 +500,7 @@ def _positive(number: float, name: str) -> float:
     return number
 
 
-def _reboundx():
+def _reboundx() -> Any:
     """REBOUNDx, imported on first use, or an error naming the extra."""
     try:
         import reboundx
@@ -543,11 +543,11 @@ class MercuryGR(Scene):
     E = 0.205630
     MASS = 1.6601e-7  # Msun (GM_sun / GM_Mercury = 6023657)
 
-    def __init__(self, periods=415.0):
+    def __init__(self, periods: float = 415.0) -> None:
         self.periods = _positive(_number(periods, "periods"), "periods")
         _reboundx()  # fail here, with the extra named, rather than in a worker
 
-    def build(self, counter=None):
+    def build(self, counter: Counter = None) -> rebound.Simulation:
         reboundx = _reboundx()
         sim = new_simulation()
         sim.add(m=1.0)
@@ -574,15 +574,15 @@ class MercuryGR(Scene):
         return sim
 
     @property
-    def period(self):
+    def period(self) -> float:
         return 2.0 * math.pi * math.sqrt(self.A**3 / (rebound_G() * (1.0 + self.MASS)))
 
-    def energy(self, sim):
+    def energy(self, sim: rebound.Simulation) -> float:
         rebx = sim._extras_ref
         return rebx.gr_hamiltonian(rebx.get_force("gr"))
 
     @staticmethod
-    def perihelion_longitude(sim):
+    def perihelion_longitude(sim: rebound.Simulation) -> float:
         """Longitude of Mercury's perihelion about the Sun in the orbit's
         plane (x, y), from the eccentricity vector: atan2 keeps full
         precision near 0, where REBOUND's ``orbit().pomega`` (an arccos)
@@ -595,7 +595,7 @@ class MercuryGR(Scene):
         v2, rv = vx * vx + vy * vy + vz * vz, x * vx + y * vy + z * vz
         return math.atan2((v2 - mu / r) * y - rv * vy, (v2 - mu / r) * x - rv * vx)
 
-    def describe(self):
+    def describe(self) -> str:
         return (f"Mercury with REBOUNDx gr: a = {self.A:g} AU, e = {self.E:g}, c = {SPEED_OF_LIGHT_AU_YR:.8g} AU/yr, "
                 f"centre-of-mass frame, {self.periods:g} orbits ({self.t_end:.4g} yr); perihelion advance "
                 f"43 arcsec/century")
