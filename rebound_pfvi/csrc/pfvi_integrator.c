@@ -461,7 +461,7 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
         st->statistics.n_steps++;
         return;
     }
-    st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_NONE};
+    st->fault.kind = PFVI_FAULT_NONE;  // a refusing layer writes the whole record
     st->retry_valid = 0;  // a step starts from the last step's stages, never from a refused one's
     if (!pfvi_scratch(st, N)){
         pfvi_report(r, st);

@@ -53,8 +53,9 @@ enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* st,
             return PFVI_TRIAL_ERROR;
         }
         n_limited += (status == PFVI_FIT_LIMITED);
-        omega_min = fmin(omega_min, scheme->fitted_omega(st, i));
-        omega_max = fmax(omega_max, scheme->fitted_omega(st, i));
+        const double fitted = scheme->fitted_omega(st, i);
+        omega_min = fmin(omega_min, fitted);
+        omega_max = fmax(omega_max, fitted);
     }
 
     const enum pfvi_trial trial = scheme->advance(r, st, N, t0, h);
