@@ -39,9 +39,10 @@ def set_raw(sim, field, value):
 
 
 @pytest.mark.parametrize("field, value, match", [
-    ("fitting", 7, r"integrator\.fitting = 7 is not valid; allowed: 'phase', 'phase-literal', 'none'"),
+    ("fitting", 7, r"integrator\.fitting = 7 is not valid; allowed: 'phase', 'phase-literal', 'none', 'exact'"),
     ("fitting", -1, r"integrator\.fitting = -1"),
-    ("frequency", 2, r"integrator\.frequency = 2 is not valid; allowed: 'curvature', 'fixed'"),
+    ("frequency", 4, r"integrator\.frequency = 4 is not valid; allowed: 'curvature', 'fixed', 'radial', 'mean-motion'"),
+    ("centre", 3, r"integrator\.centre = 3 is not valid; allowed: 'origin', 'barycentre', 'partner'"),
     ("stages", 7, r"integrator\.stages = 7 is not supported; allowed: 2 to 6"),
     ("stages", 1, r"integrator\.stages = 1 is not supported; allowed: 2 to 6"),
     ("stages", -2, r"integrator\.stages = -2"),

@@ -14,6 +14,7 @@
  *   pfvi_lobatto.c     quadrature: the Gauss-Lobatto rule
  * and beside them
  *   pfvi_osculating.c  geometry: osculating circles, curvature frequency
+ *   pfvi_centre.c      geometry: the centre and frequency of each harmonic model
  *   pfvi_state.c       scratch, forces, rollback, faults, the iteration rule
  *
  * Only symbols marked PFVI_API are exported from the library.
@@ -45,11 +46,21 @@
 #define PFVI_FITTINGS(X) \
     X(PFVI_FITTING_PHASE, 0, "phase")                  /* K&V's Ld divided by gamma(u): exact q and p on the oscillator */ \
     X(PFVI_FITTING_PHASE_LITERAL, 1, "phase-literal")  /* K&V's Ld as printed: momenta scaled by gamma(u) */ \
-    X(PFVI_FITTING_NONE, 2, "none")                    /* classical Marsden-West Ld (velocity Verlet at s = 2) */
+    X(PFVI_FITTING_NONE, 2, "none")                    /* classical Marsden-West Ld (velocity Verlet at s = 2) */ \
+    X(PFVI_FITTING_EXACT, 3, "exact")                  /* "phase" with fitted interior columns: exact on the oscillator at every s */
 
 #define PFVI_FREQUENCIES(X) \
     X(PFVI_FREQUENCY_CURVATURE, 0, "curvature")  /* K&V eq. (freq): omega = |v x a|/|v|^2, per particle */ \
-    X(PFVI_FREQUENCY_FIXED, 1, "fixed")          /* the field omega, for every particle */
+    X(PFVI_FREQUENCY_FIXED, 1, "fixed")          /* the field omega, for every particle */ \
+    X(PFVI_FREQUENCY_RADIAL, 2, "radial")        /* omega^2 = -a.d/|d|^2, d = q - centre: the harmonic part carries the central pull */ \
+    X(PFVI_FREQUENCY_MEAN_MOTION, 3, "mean-motion") /* n of the osculating Kepler orbit about the partner */
+
+// The centre the harmonic model of a particle refers to: the fitted
+// interpolation is applied to d = q - c(t), c moving uniformly over the step.
+#define PFVI_CENTRES(X) \
+    X(PFVI_CENTRE_ORIGIN, 0, "origin")          /* K&V: the coordinate origin, at rest */ \
+    X(PFVI_CENTRE_BARYCENTRE, 1, "barycentre")  /* the barycentre of the massive bodies */ \
+    X(PFVI_CENTRE_PARTNER, 2, "partner")        /* the barycentre of the particle and its partner (the body of largest G m / r^3) */
 
 #define PFVI_STEP_CONTROLS(X) \
     X(PFVI_STEP_CONTROL_SEED, 0, "seed")              /* accept/reject on the estimate, propose the next h */ \
@@ -59,6 +70,7 @@
 enum pfvi_fitting { PFVI_FITTINGS(PFVI_ENUM_VALUE) };
 enum pfvi_frequency { PFVI_FREQUENCIES(PFVI_ENUM_VALUE) };
 enum pfvi_step_control { PFVI_STEP_CONTROLS(PFVI_ENUM_VALUE) };
+enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 #undef PFVI_ENUM_VALUE
 
 // Defaults and ranges.
@@ -144,7 +156,13 @@ struct pfvi_two_point_fit {
 // in the unknowns (q_k+1 - q_k, delta q^2, ..., delta q^s-1).
 struct pfvi_stage_fit {
     double omega;
-    double G;                         // -D1 Ld_printed = G p_k: gamma_s(u) for "phase", else 1
+    double G;                         // -D1 Ld_printed = G p_k: gamma_s(u) for "phase" and "exact", else 1
+    double u2;                        // "exact": u^2, the harmonic part solved with the linear part; else 0
+    // The differentiation matrix of the interpolation, a[k][l] = psi_l'(c^k):
+    // the rule's for "none", "phase" and "phase-literal"; for "exact" its
+    // interior columns corrected so that the stationarity equations of the
+    // delta q^j hold on the oscillator's exact path (pfvi_fitting.c).
+    double a[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
     double b[PFVI_STAGES_MAX];
     double bbar[PFVI_STAGES_MAX];
     double B[PFVI_STAGES_MAX];
@@ -163,7 +181,7 @@ PFVI_INTERNAL enum pfvi_fit_status pfvi_two_point_fit(double omega, double h, do
         int literal, struct pfvi_two_point_fit* fit);
 // The stage coefficients at u (u = 0: classical) with the factorised stage
 // matrix; *det is its determinant. Used at u = 0 to set rule->det_classical.
-PFVI_INTERNAL void pfvi_stage_fit_at(const struct pfvi_lobatto* rule, double u, int phase,
+PFVI_INTERNAL void pfvi_stage_fit_at(const struct pfvi_lobatto* rule, double u, int fitting,
         struct pfvi_stage_fit* fit, double* det);
 PFVI_INTERNAL enum pfvi_fit_status pfvi_stage_fit(const struct pfvi_lobatto* rule, double omega, double h,
         double u_max, int fitting, struct pfvi_stage_fit* fit);
@@ -176,6 +194,8 @@ PFVI_API double pfvi_gamma(double u);
 PFVI_API int pfvi_two_point_coefficients(double omega, double h, double u_max, int literal, double out[6]);
 PFVI_API int pfvi_lobatto_table(int s, double* c, double* w, double* a);
 PFVI_API int pfvi_stage_coefficients(int s, double u, double* out);
+// The differentiation matrix (s x s, row-major) of fitting `fitting` at u.
+PFVI_API int pfvi_stage_differentiation(int s, double u, int fitting, double* out);
 
 /* ------------------------------------------------ geometry (osculating) */
 
@@ -224,7 +244,36 @@ struct pfvi_options {
     double u_max;
     double epsilon;
     int step_control;
+    int centre;
 };
+
+/* ------------------------------------------------ geometry (centre) */
+
+// The centre of one particle's harmonic model over a step, c(t0 + tau h) =
+// x + tau h v, and the partner whose attraction the particle's frequency
+// refers to (pfvi_centre.c).
+struct pfvi_centre {
+    double x[3];
+    double v[3];
+    double mu;          // G (m_i + m_partner), 0 without a partner
+    size_t partner;     // SIZE_MAX: none (no other body attracts it)
+};
+// The centres of N particles of masses p[i].m at the step's start. A
+// partner is the body j != i (j < N_active) of largest G m_j / |x_j - x_i|^3,
+// the stiffest attraction on i; with gravity off, G = 0 or no other massive
+// body a particle has none, and its centre is the origin (an external
+// field is given in the simulation frame). `need_partner`: find partners
+// (the centre "partner", the frequency "mean-motion").
+PFVI_INTERNAL void pfvi_centres(const struct reb_particle* p, size_t N, size_t N_active, double G,
+        int centre, int need_partner, struct pfvi_centre* c);
+// The frequency a step fits a particle to (before limiting), from its
+// position and velocity relative to its centre, d and w, its start
+// acceleration a and its centre: 0 for fitting "none", omega for "fixed",
+// |w x a|/|w|^2 for "curvature", sqrt(max(0, -a.d)/|d|^2) for "radial", the
+// osculating mean motion about its partner for "mean-motion" (0 if unbound
+// or without a partner).
+PFVI_INTERNAL double pfvi_frequency(const struct pfvi_options* o, const struct reb_particle* p,
+        const struct reb_particle* partner, const struct pfvi_centre* c, const double a[3]);
 
 // Statistics (REBOUND fields, saved in archives).
 struct pfvi_statistics {
@@ -346,6 +395,7 @@ struct pfvi_state {
     // frequency at its end (the controller's u bound), and the osculating
     // circles at its start.
     double* omega_fit;
+    struct pfvi_centre* centre;    // each particle's centre in this step
     double* omega_end;
     struct pfvi_osculating* osculating_start;
     // The s-stage solve: quadrature, per-particle fits, stage accelerations
@@ -355,6 +405,11 @@ struct pfvi_state {
     struct pfvi_stage_fit* stage_fit;
     double (*stage_a)[PFVI_STAGES_MAX][3];
     double (*predictor_a)[PFVI_STAGES_MAX][3];
+    // The positions at which stage_a (predictor_a) were evaluated or
+    // predicted: "exact" solves the harmonic part of the force implicitly
+    // and iterates on the residual a^k + omega^2 d^k only.
+    double (*stage_x)[PFVI_STAGES_MAX][3];
+    double (*predictor_x)[PFVI_STAGES_MAX][3];
     double (*unknowns)[PFVI_STAGES_MAX-1][3];
     double (*unknowns_next)[PFVI_STAGES_MAX-1][3];
     // The last step's stage accelerations seed the next solve if it starts
@@ -445,10 +500,6 @@ PFVI_INTERNAL extern const struct pfvi_scheme pfvi_stages_scheme;     // pfvi_st
 PFVI_INTERNAL enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h);
 PFVI_INTERNAL void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double h);
 
-// The frequency a step fits a particle with velocity v and start acceleration
-// a to (before limiting): 0 for fitting "none", omega for "fixed", else the
-// curvature frequency.
-PFVI_INTERNAL double pfvi_step_frequency(const struct pfvi_options* o, const double v[3], const double a[3]);
 
 /* ---------------------------------------------------------- step control */
 

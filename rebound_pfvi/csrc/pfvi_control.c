@@ -134,7 +134,10 @@ static double control_reversible(struct reb_simulation* r, struct pfvi_state* st
         h = fabs(st->dt_reversible);
     }
     h = fabs(control_u_bound(st, h, omega_start_max));
-    const int fitted = (st->options.fitting != PFVI_FITTING_NONE && st->options.frequency == PFVI_FREQUENCY_CURVATURE);
+    // The mean of the two ends is the curvature frequency in the simulation frame:
+    // only that model (K&V's) is fitted symmetrically; the others keep the start's.
+    const int fitted = (st->options.fitting != PFVI_FITTING_NONE && st->options.frequency == PFVI_FREQUENCY_CURVATURE
+        && st->options.centre == PFVI_CENTRE_ORIGIN);
     double lo = 0., hi = INFINITY;                // F(lo) < 1 < F(hi) once bracketed
     double log_h_prev = NAN, log_F_prev = NAN;    // the previous trial, for the secant
     struct control_view view = {0., 0., 0, 0., 0.};

@@ -158,9 +158,47 @@ static void stage_matrix_factor(int m, struct pfvi_stage_fit* fit, double* det){
     *det = d;
 }
 
-// Coefficients, momentum normalisation and factorised matrix at u (u = 0: classical).
-void pfvi_stage_fit_at(const struct pfvi_lobatto* rule, double u, int phase, struct pfvi_stage_fit* fit, double* det){
+// "exact": each interior column j of the differentiation matrix gets the
+// least-norm correction that makes the stationarity equation of delta q^j
+// hold on the oscillator's exact paths phi = cos, sin of x = u (tau - 1/2):
+//     sum_k w_k a~_kj phi'(c^k) = u^2 w_j phi(c^j)
+// (with delta q = 0 there, since b and bbar already carry those paths). The
+// correction functions keep their values at the nodes, only their slopes
+// there change, so Ld keeps the form of K&V's and stays symmetric. The two
+// conditions are divided by u^2 and u, so that they stay O(1) as u -> 0,
+// where the correction vanishes like u^2.
+static void exact_columns(const struct pfvi_lobatto* rule, double u, struct pfvi_stage_fit* fit){
     const int s = rule->s;
+    double m1[PFVI_STAGES_MAX], m2[PFVI_STAGES_MAX], sin_x[PFVI_STAGES_MAX], cos_x[PFVI_STAGES_MAX];
+    double M11 = 0., M12 = 0., M22 = 0.;
+    for (int k=0; k<s; k++){
+        const double x = u*(rule->c[k] - 0.5);
+        sin_x[k] = sin(x);
+        cos_x[k] = cos(x);
+        m1[k] = -rule->w[k]*sin_x[k]/u;   // w_k (cos x)'/u^2, per unit tau
+        m2[k] = rule->w[k]*cos_x[k];      // w_k (sin x)'/u
+        M11 += m1[k]*m1[k]; M12 += m1[k]*m2[k]; M22 += m2[k]*m2[k];
+    }
+    const double det = M11*M22 - M12*M12;
+    for (int j=1; j<s-1; j++){
+        double r1 = -rule->w[j]*cos_x[j], r2 = -u*rule->w[j]*sin_x[j];
+        for (int k=0; k<s; k++){
+            r1 += m1[k]*fit->a[k][j];
+            r2 += m2[k]*fit->a[k][j];
+        }
+        const double l1 = -(M22*r1 - M12*r2)/det;
+        const double l2 = -(M11*r2 - M12*r1)/det;
+        for (int k=0; k<s; k++){
+            fit->a[k][j] += l1*m1[k] + l2*m2[k];
+        }
+    }
+}
+
+// Coefficients, momentum normalisation and factorised matrix at u (u = 0: classical).
+void pfvi_stage_fit_at(const struct pfvi_lobatto* rule, double u, int fitting, struct pfvi_stage_fit* fit, double* det){
+    const int s = rule->s;
+    const int phase = (fitting == PFVI_FITTING_PHASE || fitting == PFVI_FITTING_EXACT);
+    memcpy(fit->a, rule->a, sizeof(fit->a));
     if (u == 0.){
         for (int k=0; k<s; k++){
             fit->b[k] = 1. - rule->c[k]; fit->bbar[k] = rule->c[k];
@@ -189,24 +227,45 @@ void pfvi_stage_fit_at(const struct pfvi_lobatto* rule, double u, int phase, str
         // exact integral, the factor by which the printed Ld scales the
         // oscillator's exact discrete Lagrangian.
         fit->G = phase ? gamma_sum*u_over_sin_u : 1.;
+        if (fitting == PFVI_FITTING_EXACT){
+            exact_columns(rule, u, fit);
+        }
     }
     // The equations -D1 Ld = G p_k (row 0) and dLd/d(delta q^j) = 0 (rows j),
     // linear in the unknowns (Delta = q_k+1 - q_k, delta q^j) for given stage
     // accelerations.
+    //
+    // "exact" also moves the harmonic part of the stage accelerations,
+    // h^2 a^k = -u^2 d^k + h^2 r^k with d^k = (1 + beta_m^k) d_k + bbar^k Delta
+    // + delta q^k, into the matrix, so that the iteration runs on the
+    // residual r only (exact in one round on the oscillator, and convergent
+    // at any u there).
+    fit->u2 = (fitting == PFVI_FITTING_EXACT) ? u*u : 0.;
     const int m = s - 1;
     double row_B[PFVI_STAGES_MAX];  // multipliers of h qdot^k in each equation: w_k B^k, w_k a^k_j
+    double row_b[PFVI_STAGES_MAX];  // multipliers of h^2 a^k: w_k b^k, w_j at node j
     memset(fit->lu, 0, sizeof(fit->lu));
     for (int e=0; e<m; e++){
         for (int k=0; k<s; k++){
-            row_B[k] = rule->w[k]*(e == 0 ? fit->B[k] : rule->a[k][e]);
+            row_B[k] = rule->w[k]*(e == 0 ? fit->B[k] : fit->a[k][e]);
+            row_b[k] = (e == 0) ? rule->w[k]*fit->b[k] : (k == e ? rule->w[k] : 0.);
         }
         double q0 = 0.;
         for (int k=0; k<s; k++){
             fit->lu[e][0] += row_B[k]*fit->Bbar[k];
             for (int l=1; l<m; l++){
-                fit->lu[e][l] += row_B[k]*rule->a[k][l];
+                fit->lu[e][l] += row_B[k]*fit->a[k][l];
             }
             q0 += row_B[k]*fit->beta_d[k];
+        }
+        if (fit->u2 != 0.){
+            for (int k=0; k<s; k++){
+                fit->lu[e][0] -= fit->u2*row_b[k]*fit->bbar[k];
+                q0 -= fit->u2*row_b[k]*(1. + fit->beta_m[k]);
+            }
+            for (int l=1; l<m; l++){
+                fit->lu[e][l] -= fit->u2*row_b[l];
+            }
         }
         fit->q0_row[e] = q0;
     }
@@ -218,7 +277,7 @@ int pfvi_stage_rule(int s, struct pfvi_lobatto* rule){
         return 0;
     }
     struct pfvi_stage_fit classical;
-    pfvi_stage_fit_at(rule, 0., 0, &classical, &rule->det_classical);
+    pfvi_stage_fit_at(rule, 0., PFVI_FITTING_NONE, &classical, &rule->det_classical);
     return 1;
 }
 
@@ -227,7 +286,7 @@ enum pfvi_fit_status pfvi_stage_fit(const struct pfvi_lobatto* rule, double omeg
     double u;
     const enum pfvi_fit_status status = pfvi_limit_u(&omega, h, u_max, &u);
     double det;
-    pfvi_stage_fit_at(rule, u, fitting == PFVI_FITTING_PHASE, fit, &det);
+    pfvi_stage_fit_at(rule, u, fitting, fit, &det);
     fit->omega = (u == 0.) ? 0. : omega;
     // Where the matrix is (nearly) singular q_k+1 is not determined by
     // (q_k, p_k); where G vanishes "phase" divides momenta by zero.
@@ -244,13 +303,29 @@ int pfvi_stage_coefficients(int s, double u, double* out){
     }
     struct pfvi_stage_fit fit;
     double det;
-    pfvi_stage_fit_at(&rule, u, 1, &fit, &det);
+    pfvi_stage_fit_at(&rule, u, PFVI_FITTING_PHASE, &fit, &det);
     const double* rows[6] = {fit.b, fit.bbar, fit.B, fit.Bbar, fit.beta_m, fit.beta_d};
     out[0] = fit.G;
     out[1] = det/rule.det_classical;
     for (int r=0; r<6; r++){
         for (int k=0; k<s; k++){
             out[2 + r*s + k] = rows[r][k];
+        }
+    }
+    return 1;
+}
+
+int pfvi_stage_differentiation(int s, double u, int fitting, double* out){
+    struct pfvi_lobatto rule;
+    if (!pfvi_stage_rule(s, &rule)){
+        return 0;
+    }
+    struct pfvi_stage_fit fit;
+    double det;
+    pfvi_stage_fit_at(&rule, u, fitting, &fit, &det);
+    for (int k=0; k<s; k++){
+        for (int j=0; j<s; j++){
+            out[k*s + j] = fit.a[k][j];
         }
     }
     return 1;

@@ -66,6 +66,7 @@ const struct reb_integrator pfvi_integrator = {
 static struct reb_binarydata_enum_descriptor pfvi_fitting_enum[] = { PFVI_FITTINGS(PFVI_ENUM_DESCRIPTOR) { 0 } };
 static struct reb_binarydata_enum_descriptor pfvi_frequency_enum[] = { PFVI_FREQUENCIES(PFVI_ENUM_DESCRIPTOR) { 0 } };
 static struct reb_binarydata_enum_descriptor pfvi_step_control_enum[] = { PFVI_STEP_CONTROLS(PFVI_ENUM_DESCRIPTOR) { 0 } };
+static struct reb_binarydata_enum_descriptor pfvi_centre_enum[] = { PFVI_CENTRES(PFVI_ENUM_DESCRIPTOR) { 0 } };
 #undef PFVI_ENUM_DESCRIPTOR
 
 // A field of the state: its documentation, REBOUND type, and member of
@@ -78,16 +79,38 @@ static struct reb_binarydata_enum_descriptor pfvi_step_control_enum[] = { PFVI_S
 static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[] = {
     { "Fitting of the discrete Lagrangian. 'phase' (default): K&V's phase-fitted "
       "Ld divided by gamma(u) = u cot u, which makes positions and momenta exact on the "
-      "harmonic oscillator (two nodes). 'phase-literal': Ld exactly as printed by K&V; positions "
-      "are exact on the oscillator but momenta come out scaled by gamma(u). 'none': the "
-      "classical trapezoidal Ld of Marsden & West (velocity Verlet), and for stages >= 3 the "
-      "classical Lobatto Ld. Type: text (REBOUND lists its storage type). Default 'phase'.",
+      "harmonic oscillator with two nodes, but not for stages >= 3 (the interior corrections, "
+      "polynomial, move the stage points off the oscillator's path). 'exact': 'phase' with each "
+      "interior column of the differentiation matrix corrected (least norm) so that the "
+      "stationarity equations hold on the oscillator's exact path: exact on the oscillator at "
+      "every s, of order 2s - 2, and the same as 'phase' at s = 2. 'phase-literal': Ld exactly as "
+      "printed by K&V; positions are exact on the oscillator (two nodes) but momenta come out "
+      "scaled by gamma(u). 'none': the classical trapezoidal Ld of Marsden & West (velocity "
+      "Verlet), and for stages >= 3 the classical Lobatto Ld. The seed's schemes as printed are "
+      "'phase' and 'phase-literal' with centre = 'origin' and frequency = 'curvature'. "
+      "Type: text (REBOUND lists its storage type). Default 'phase'.",
       REB_INT, "fitting", offsetof(struct pfvi_state, options.fitting), 0, 0, pfvi_fitting_enum },
-    { "Source of the frequency omega. 'curvature' (default): per particle, omega = "
-      "|v x a|/|v|^2 at the start of the step, in the simulation frame (K&V, 'Frequency "
-      "Evaluation and Error Control'); 0 for a particle at rest or on a straight line. 'fixed': "
-      "the field omega, for every particle. Type: text. Default 'curvature'.",
+    { "Source of the frequency omega, per particle, at the start of each step, from its "
+      "position d and velocity w relative to its centre (see centre) and its acceleration a. "
+      "'curvature' (default; K&V, 'Frequency Evaluation and Error Control'): |w x a|/|w|^2, the "
+      "angular rate on the osculating circle; 0 on a straight line or at rest. 'radial': "
+      "sqrt(-a.d)/|d|, so that the harmonic part -omega^2 d carries the whole pull towards the "
+      "centre at the step's start (0 if a points away from it). 'mean-motion': the mean motion "
+      "sqrt(mu/A^3) of the osculating two-body orbit about the particle's partner (the body of "
+      "largest G m/r^3; mu = G (m + m_partner)), a constant of the unperturbed two-body motion; 0 if "
+      "unbound or without a partner. 'fixed': the field omega, for every particle. Type: text. "
+      "Default 'curvature'.",
       REB_INT, "frequency", offsetof(struct pfvi_state, options.frequency), 0, 0, pfvi_frequency_enum },
+    { "The centre of each particle's harmonic model: the fitted interpolation is applied to "
+      "d = q - c(t), with c moving uniformly over the step from its position and velocity at the "
+      "start. 'origin' (default; K&V): the coordinate origin, at rest, so the step depends on the "
+      "inertial frame. 'barycentre': the barycentre of the massive bodies (frame-free). 'partner': "
+      "the barycentre of the particle and its partner, the body j of largest G m_j/r^3 (the "
+      "stiffest attraction on it: a moon's planet, a planet's star, a star's planet), "
+      "frame-free and exact for both bodies of a circular pair. With gravity off, G = 0 or no "
+      "other massive body (an external field) a particle's centre is the origin. Not used with "
+      "fitting 'none'. Type: text. Default 'origin'.",
+      REB_INT, "centre", offsetof(struct pfvi_state, options.centre), 0, 0, pfvi_centre_enum },
     PFVI_OPTION("Frequency used when frequency = 'fixed' (code units of 1/time, finite, >= 0). Default 0.",
         REB_DOUBLE, omega),
     PFVI_OPTION("Number s of Gauss-Lobatto nodes of the discrete Lagrangian, an integer from "
@@ -98,7 +121,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "(default): order 6, stable there. s >= 3: interior corrections delta q^j made stationary "
         "(K&V, 'Increasing the algebraic order'), solved by "
         "fixed-point iteration with s - 1 force evaluations per iteration (s if forces depend "
-        "on velocities), at most " PFVI_STR(PFVI_STAGE_MAX_ITERATIONS) " iterations per step. "
+        "on velocities), at most " PFVI_STR(PFVI_ITERATION_MAX) " iterations per step. "
         "Default " PFVI_STR(PFVI_STAGES_DEFAULT) ".",
         REB_INT, stages),
     PFVI_OPTION("Largest |u| = omega*|dt| used in the fitted coefficients; a larger value is "
@@ -141,6 +164,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         offsetof(struct pfvi_state, N_compensation), sizeof(struct pfvi_compensation), 0 },
     { "", REB_POINTER, "stage_accelerations", offsetof(struct pfvi_state, predictor_a),
         offsetof(struct pfvi_state, predictor_N), sizeof(*((struct pfvi_state*)0)->predictor_a), 0 },
+    { "", REB_POINTER, "stage_positions", offsetof(struct pfvi_state, predictor_x),
+        offsetof(struct pfvi_state, predictor_N), sizeof(*((struct pfvi_state*)0)->predictor_x), 0 },
     { "", REB_DOUBLE, "dt_reversible", offsetof(struct pfvi_state, dt_reversible), 0, 0, 0 },
     { "", REB_INT, "predictor_stages", offsetof(struct pfvi_state, predictor_stages), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_h", offsetof(struct pfvi_state, predictor_h), 0, 0, 0 },
@@ -192,6 +217,7 @@ static void* pfvi_create(void){
         .u_max = PFVI_U_MAX_DEFAULT,
         .epsilon = PFVI_EPSILON_DEFAULT,
         .step_control = PFVI_STEP_CONTROL_REVERSIBLE,
+        .centre = PFVI_CENTRE_ORIGIN,
     };
     return st;
 }
@@ -308,7 +334,8 @@ static int pfvi_enum_valid(struct reb_simulation* r, const char* field, int valu
 
 static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_options* o){
     if (!pfvi_enum_valid(r, "fitting", o->fitting, pfvi_fitting_enum)
-            || !pfvi_enum_valid(r, "frequency", o->frequency, pfvi_frequency_enum)){
+            || !pfvi_enum_valid(r, "frequency", o->frequency, pfvi_frequency_enum)
+            || !pfvi_enum_valid(r, "centre", o->centre, pfvi_centre_enum)){
         return 0;
     }
     if (o->stages < PFVI_STAGES_MIN || o->stages > PFVI_STAGES_MAX){
@@ -416,13 +443,18 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
         }
     }
     const struct reb_particle* const p0 = st->start;
+    const struct pfvi_options* const o = &st->options;
+    const int fitted = (o->fitting != PFVI_FITTING_NONE);
+    const int need_partner = fitted && (o->centre == PFVI_CENTRE_PARTNER || o->frequency == PFVI_FREQUENCY_MEAN_MOTION);
+    pfvi_centres(p0, N, r->N_active, (r->gravity == REB_GRAVITY_NONE) ? 0. : r->G,
+            fitted ? o->centre : PFVI_CENTRE_ORIGIN, need_partner, st->centre);
     for (size_t i=0; i<N; i++){
-        const double v[3] = {p0[i].vx, p0[i].vy, p0[i].vz};
-        st->omega_fit[i] = pfvi_step_frequency(&st->options, v, e[i].a);
+        const size_t j = st->centre[i].partner;
+        st->omega_fit[i] = pfvi_frequency(o, &p0[i], (j == SIZE_MAX) ? NULL : &p0[j], &st->centre[i], e[i].a);
         if (isnan(st->omega_fit[i])){
             pfvi_roll_back(r, st, N, t0);
-            pfvi_error(r, "pfvi: particle %zu: its curvature frequency |v x a|/|v|^2 is not a number at t = %.17g; "
-                    "step not taken, state restored.", i, t0);
+            pfvi_error(r, "pfvi: particle %zu: its %s frequency is not a number at t = %.17g; "
+                    "step not taken, state restored.", i, pfvi_frequency_enum[o->frequency].name, t0);
             return 0;
         }
     }
@@ -529,7 +561,8 @@ const char* pfvi_option_value_name(const char* field, int i){
     const struct reb_binarydata_enum_descriptor* values =
         !strcmp(field, "fitting") ? pfvi_fitting_enum :
         !strcmp(field, "frequency") ? pfvi_frequency_enum :
-        !strcmp(field, "step_control") ? pfvi_step_control_enum : NULL;
+        !strcmp(field, "step_control") ? pfvi_step_control_enum :
+        !strcmp(field, "centre") ? pfvi_centre_enum : NULL;
     for (int k=0; values && values[k].name[0]; k++){
         if (k == i){
             return values[k].name;

@@ -28,20 +28,33 @@
 
 // Solves the linear part for one particle: unknowns y[e][component] from the
 // stage accelerations sa[k][component].
+// h^2 times the force the iteration carries at stage k, component c: the
+// acceleration sa, or for "exact" (u2 > 0) the residual a + omega^2 d at
+// the point sx where it was evaluated.
+static inline double stage_force_h2(const struct pfvi_lobatto* rule, const struct pfvi_stage_fit* f,
+        const struct pfvi_centre* centre, double h, const double (*sa)[3], const double (*sx)[3], int k, int c){
+    const double h2a = h*h*sa[k][c];
+    if (f->u2 == 0.){
+        return h2a;
+    }
+    const double d = (sx[k][c] - centre->x[c]) - rule->c[k]*h*centre->v[c];
+    return h2a + f->u2*d;
+}
+
 static void stage_solve_linear(const struct pfvi_lobatto* rule, const struct pfvi_stage_fit* f,
-        const struct reb_particle* p0, double h, const double (*sa)[3], double (*y)[3]){
+        const struct reb_particle* p0, const struct pfvi_centre* centre, double h, const double (*sa)[3],
+        const double (*sx)[3], double (*y)[3]){
     const int s = rule->s, m = s - 1;
-    const double h2 = h*h;
-    const double q0[3] = {p0->x, p0->y, p0->z};
-    const double v0[3] = {p0->vx, p0->vy, p0->vz};
+    const double q0[3] = {p0->x - centre->x[0], p0->y - centre->x[1], p0->z - centre->x[2]};
+    const double v0[3] = {p0->vx - centre->v[0], p0->vy - centre->v[1], p0->vz - centre->v[2]};
     for (int c=0; c<3; c++){
         double force = 0.;
         for (int k=0; k<s; k++){
-            force += rule->w[k]*f->b[k]*sa[k][c];
+            force += rule->w[k]*f->b[k]*stage_force_h2(rule, f, centre, h, sa, sx, k, c);
         }
-        y[0][c] = -f->G*h*v0[c] - h2*force - f->q0_row[0]*q0[c];
+        y[0][c] = -f->G*h*v0[c] - force - f->q0_row[0]*q0[c];
         for (int j=1; j<m; j++){
-            y[j][c] = -h2*rule->w[j]*sa[j][c] - f->q0_row[j]*q0[c];
+            y[j][c] = -rule->w[j]*stage_force_h2(rule, f, centre, h, sa, sx, j, c) - f->q0_row[j]*q0[c];
         }
     }
     // Forward and back substitution with the stored LU factors and pivots.
@@ -69,33 +82,41 @@ static void stage_solve_linear(const struct pfvi_lobatto* rule, const struct pfv
     }
 }
 
-// Stage point k of one particle. The last stage is q_k + (Delta + carried
-// low-order part), exactly the position the step will end on.
+// The step's position increment q_k+1 - q_k of one component: the change
+// of d = q - c and the centre's drift.
+static inline double stage_increment(const struct pfvi_centre* centre, const double (*y)[3], double h, int c){
+    return y[0][c] + h*centre->v[c];
+}
+
+// Stage point k of one particle: q_k + (c^k h vc + beta_m d_k + bbar (d_k+1 - d_k)
+// + delta q^k). The last stage is q_k + (increment + carried low-order part),
+// exactly the position the step will end on.
 static void stage_position(const struct pfvi_lobatto* rule, const struct pfvi_stage_fit* f,
-        const struct reb_particle* p0, const struct pfvi_compensation* comp, const double (*y)[3],
-        int k, double x[3]){
+        const struct reb_particle* p0, const struct pfvi_centre* centre, const struct pfvi_compensation* comp,
+        const double (*y)[3], double h, int k, double x[3]){
     const double q0[3] = {p0->x, p0->y, p0->z};
     const int s = rule->s;
     for (int c=0; c<3; c++){
         if (k == 0){
             x[c] = q0[c];
         }else if (k == s - 1){
-            x[c] = q0[c] + (y[0][c] + comp->x[c]);
+            x[c] = q0[c] + (stage_increment(centre, y, h, c) + comp->x[c]);
         }else{
-            x[c] = q0[c] + (f->beta_m[k]*q0[c] + f->bbar[k]*y[0][c] + y[k][c]);
+            const double d0 = q0[c] - centre->x[c];
+            x[c] = q0[c] + ((f->beta_m[k]*d0 + f->bbar[k]*y[0][c] + y[k][c]) + rule->c[k]*h*centre->v[c]);
         }
     }
 }
 
-// h qdot^k of one particle.
+// h ddot^k of one particle (its velocity relative to its centre, times h).
 static void stage_velocity_times_h(const struct pfvi_lobatto* rule, const struct pfvi_stage_fit* f,
-        const struct reb_particle* p0, const double (*y)[3], int k, double qd[3]){
-    const double q0[3] = {p0->x, p0->y, p0->z};
+        const struct reb_particle* p0, const struct pfvi_centre* centre, const double (*y)[3], int k, double qd[3]){
+    const double d0[3] = {p0->x - centre->x[0], p0->y - centre->x[1], p0->z - centre->x[2]};
     const int s = rule->s;
     for (int c=0; c<3; c++){
-        double sum = f->beta_d[k]*q0[c] + f->Bbar[k]*y[0][c];
+        double sum = f->beta_d[k]*d0[c] + f->Bbar[k]*y[0][c];
         for (int l=1; l<s-1; l++){
-            sum += rule->a[k][l]*y[l][c];
+            sum += f->a[k][l]*y[l][c];
         }
         qd[c] = sum;
     }
@@ -112,12 +133,13 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
     for (int k=vdep ? 0 : 1; k<s; k++){
         for (size_t i=0; i<N; i++){
             double x[3];
-            stage_position(rule, &st->stage_fit[i], &st->start[i], &st->compensation[i], st->unknowns[i], k, x);
+            const struct pfvi_centre* const centre = &st->centre[i];
+            stage_position(rule, &st->stage_fit[i], &st->start[i], centre, &st->compensation[i], st->unknowns[i], h, k, x);
             ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
             if (vdep){
                 double qd[3];
-                stage_velocity_times_h(rule, &st->stage_fit[i], &st->start[i], st->unknowns[i], k, qd);
-                ps[i].vx = qd[0]/h; ps[i].vy = qd[1]/h; ps[i].vz = qd[2]/h;
+                stage_velocity_times_h(rule, &st->stage_fit[i], &st->start[i], centre, st->unknowns[i], k, qd);
+                ps[i].vx = centre->v[0] + qd[0]/h; ps[i].vy = centre->v[1] + qd[1]/h; ps[i].vz = centre->v[2] + qd[2]/h;
             }
         }
         r->t = t0 + rule->c[k]*h;
@@ -125,6 +147,9 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
             return 0;
         }
         for (size_t i=0; i<N; i++){
+            st->stage_x[i][k][0] = ps[i].x;
+            st->stage_x[i][k][1] = ps[i].y;
+            st->stage_x[i][k][2] = ps[i].z;
             st->stage_a[i][k][0] = ps[i].ax;
             st->stage_a[i][k][1] = ps[i].ay;
             st->stage_a[i][k][2] = ps[i].az;
@@ -160,24 +185,35 @@ static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
             }
         }
     }
+    const struct reb_particle* const p0 = st->start;
     for (size_t i=0; i<N; i++){
         // A retry reads the values it overwrites: this particle's, copied first.
-        double source[PFVI_STAGES_MAX][3];
+        double source[PFVI_STAGES_MAX][3], source_x[PFVI_STAGES_MAX][3];
         for (int m=0; m<s; m++){
             for (int c=0; c<3; c++){
                 source[m][c] = retry ? st->stage_a[i][m][c] : (extrapolate ? st->predictor_a[i][m][c] : 0.);
+                source_x[m][c] = retry ? st->stage_x[i][m][c] : (extrapolate ? st->predictor_x[i][m][c] : 0.);
             }
         }
+        const double q0[3] = {p0[i].x, p0[i].y, p0[i].z};
+        const double v0[3] = {p0[i].vx, p0[i].vy, p0[i].vz};
         for (int k=0; k<s; k++){
             for (int c=0; c<3; c++){
                 if (k == 0 || !(retry || extrapolate)){
-                    st->stage_a[i][k][c] = st->end[i].a[c];  // the start acceleration
+                    // The start acceleration, at the start position moved along its tangent.
+                    const double t = rule->c[k]*h;
+                    st->stage_a[i][k][c] = st->end[i].a[c];
+                    st->stage_x[i][k][c] = (k == 0) ? q0[c] : q0[c] + t*(v0[c] + 0.5*t*st->end[i].a[c]);
                 }else{
-                    double sum = 0.;
+                    double sum = 0., sum_x = 0.;
                     for (int m=0; m<s; m++){
                         sum += x[k][m]*source[m][c];
+                        sum_x += x[k][m]*source_x[m][c];
                     }
                     st->stage_a[i][k][c] = sum;
+                    // (positions from an archive written before they were saved are not numbers)
+                    const double t = rule->c[k]*h;
+                    st->stage_x[i][k][c] = isfinite(sum_x) ? sum_x : q0[c] + t*(v0[c] + 0.5*t*st->end[i].a[c]);
                 }
             }
         }
@@ -225,7 +261,8 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
     for (int iteration=0; iteration<=PFVI_ITERATION_MAX; iteration++){
         change = 0.;
         for (size_t i=0; i<N; i++){
-            stage_solve_linear(rule, &st->stage_fit[i], &p0[i], h, (const double (*)[3])st->stage_a[i], st->unknowns_next[i]);
+            stage_solve_linear(rule, &st->stage_fit[i], &p0[i], &st->centre[i], h, (const double (*)[3])st->stage_a[i],
+                    (const double (*)[3])st->stage_x[i], st->unknowns_next[i]);
             if (iteration == 0){
                 continue;
             }
@@ -281,17 +318,29 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
         struct pfvi_compensation* const comp = &st->compensation[i];
         const double (*y)[3] = st->unknowns[i];
         double dv[3] = {0., 0., 0.};
+        const struct pfvi_centre* const centre = &st->centre[i];
+        const double d0[3] = {p0[i].x - centre->x[0], p0[i].y - centre->x[1], p0[i].z - centre->x[2]};
         for (int k=0; k<s; k++){
             double qd[3];
-            stage_velocity_times_h(rule, f, &p0[i], y, k, qd);
+            stage_velocity_times_h(rule, f, &p0[i], centre, y, k, qd);
             const double wk = rule->w[k], wf = h2*(1. + f->beta_m[k]);
             for (int c=0; c<3; c++){
-                dv[c] += wk*(f->beta_d[k]*qd[c] + wf*st->stage_a[i][k][c]);
+                if (f->u2 == 0.){
+                    dv[c] += wk*(f->beta_d[k]*qd[c] + wf*st->stage_a[i][k][c]);
+                }else{
+                    // The harmonic part at the solved stage point, the
+                    // residual where it was evaluated: as the solve used them.
+                    const double d = (k == 0) ? d0[c] : (k == s - 1) ? d0[c] + y[0][c]
+                        : (1. + f->beta_m[k])*d0[c] + f->bbar[k]*y[0][c] + y[k][c];
+                    const double h2a = stage_force_h2(rule, f, centre, h, (const double (*)[3])st->stage_a[i],
+                            (const double (*)[3])st->stage_x[i], k, c) - f->u2*d;
+                    dv[c] += wk*(f->beta_d[k]*qd[c] + (1. + f->beta_m[k])*h2a);
+                }
             }
         }
         const double gh = f->G*h;
         double x[3];
-        stage_position(rule, f, &p0[i], comp, y, s - 1, x);
+        stage_position(rule, f, &p0[i], &st->centre[i], comp, y, h, s - 1, x);
         ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
         const double inc_v[3] = {dv[0]/gh + comp->v[0], dv[1]/gh + comp->v[1], dv[2]/gh + comp->v[2]};
         ps[i].vx = p0[i].vx + inc_v[0];
@@ -315,9 +364,10 @@ static void stages_commit(struct reb_simulation* r, struct pfvi_state* st, size_
     for (size_t i=0; i<N; i++){
         struct pfvi_compensation* const comp = &st->compensation[i];
         const double (*y)[3] = st->unknowns[i];
-        comp->x[0] = (y[0][0] + comp->x[0]) - (ps[i].x - p0[i].x);
-        comp->x[1] = (y[0][1] + comp->x[1]) - (ps[i].y - p0[i].y);
-        comp->x[2] = (y[0][2] + comp->x[2]) - (ps[i].z - p0[i].z);
+        const struct pfvi_centre* const centre = &st->centre[i];
+        comp->x[0] = (stage_increment(centre, y, h, 0) + comp->x[0]) - (ps[i].x - p0[i].x);
+        comp->x[1] = (stage_increment(centre, y, h, 1) + comp->x[1]) - (ps[i].y - p0[i].y);
+        comp->x[2] = (stage_increment(centre, y, h, 2) + comp->x[2]) - (ps[i].z - p0[i].z);
         comp->v[0] = st->dv[i].x - (ps[i].vx - p0[i].vx);
         comp->v[1] = st->dv[i].y - (ps[i].vy - p0[i].vy);
         comp->v[2] = st->dv[i].z - (ps[i].vz - p0[i].vz);
@@ -325,6 +375,9 @@ static void stages_commit(struct reb_simulation* r, struct pfvi_state* st, size_
     double (*swap)[PFVI_STAGES_MAX][3] = st->predictor_a;
     st->predictor_a = st->stage_a;
     st->stage_a = swap;
+    swap = st->predictor_x;
+    st->predictor_x = st->stage_x;
+    st->stage_x = swap;
     st->predictor_stages = st->rule.s;
     st->predictor_N = N;
     st->predictor_h = h;

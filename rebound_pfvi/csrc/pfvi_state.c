@@ -23,7 +23,10 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->stage_fit);
     free(st->stage_a);
     free(st->predictor_a);
+    free(st->stage_x);
+    free(st->predictor_x);
     free(st->omega_fit);
+    free(st->centre);
     free(st->omega_end);
     free(st->osculating_start);
     free(st->unknowns);
@@ -70,7 +73,10 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->stage_fit = pfvi_grow(st->stage_fit, N*sizeof(*st->stage_fit), &ok);
     st->stage_a = pfvi_grow(st->stage_a, N*sizeof(*st->stage_a), &ok);
     st->predictor_a = pfvi_grow(st->predictor_a, N*sizeof(*st->predictor_a), &ok);
+    st->stage_x = pfvi_grow(st->stage_x, N*sizeof(*st->stage_x), &ok);
+    st->predictor_x = pfvi_grow(st->predictor_x, N*sizeof(*st->predictor_x), &ok);
     st->omega_fit = pfvi_grow(st->omega_fit, N*sizeof(*st->omega_fit), &ok);
+    st->centre = pfvi_grow(st->centre, N*sizeof(*st->centre), &ok);
     st->omega_end = pfvi_grow(st->omega_end, N*sizeof(*st->omega_end), &ok);
     st->osculating_start = pfvi_grow(st->osculating_start, N*sizeof(*st->osculating_start), &ok);
     st->unknowns = pfvi_grow(st->unknowns, N*sizeof(*st->unknowns), &ok);

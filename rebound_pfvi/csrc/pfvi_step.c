@@ -8,16 +8,6 @@
 #include <math.h>
 #include "pfvi.h"
 
-double pfvi_step_frequency(const struct pfvi_options* o, const double v[3], const double a[3]){
-    if (o->fitting == PFVI_FITTING_NONE){
-        return 0.;
-    }
-    if (o->frequency == PFVI_FREQUENCY_FIXED){
-        return o->omega;
-    }
-    return pfvi_curvature_frequency(v, a);
-}
-
 static const struct pfvi_scheme* pfvi_scheme_of(const struct pfvi_state* st){
     return (st->options.stages == 2) ? &pfvi_two_point_scheme : &pfvi_stages_scheme;
 }

@@ -1,7 +1,8 @@
 /**
  * pfvi_two_point.c: the two-point scheme (stages = 2; K&V section 3), an
  * explicit step with the closed form of pfvi_fitting.c: kick with the
- * residual force a + omega^2 q, rotate with the harmonic flow at omega, kick
+ * residual force a + omega^2 d (d = q - c, c the particle's centre,
+ * pfvi_centre.c), rotate with the harmonic flow at omega about c, kick
  * again with the force at the end (the only force evaluation: the start
  * force is the last step's end force, pfvi_state.c). With forces that depend
  * on velocities the final kick is implicit, solved by fixed-point iteration.
@@ -27,9 +28,17 @@ static double two_point_fitted_omega(const struct pfvi_state* st, size_t i){
     return st->fit[i].omega;
 }
 
-// Implicit final kick for velocity-dependent forces: v = vr + k (a(q, v) + omega^2 q),
+// The position of particle i relative to its centre at the end of a step of h.
+static void end_offset(const struct pfvi_state* st, const struct reb_particle* p, size_t i, double h, double d[3]){
+    const struct pfvi_centre* const c = &st->centre[i];
+    d[0] = (p->x - c->x[0]) - h*c->v[0];
+    d[1] = (p->y - c->x[1]) - h*c->v[1];
+    d[2] = (p->z - c->x[2]) - h*c->v[2];
+}
+
+// Implicit final kick for velocity-dependent forces: v = vr + k (a(q, v) + omega^2 d),
 // by fixed-point iteration under the common stopping rule.
-static int final_kick_velocity_dependent(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
+static int final_kick_velocity_dependent(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){
     struct reb_particle* const ps = r->particles;
     const struct pfvi_two_point_fit* const fit = st->fit;
     double previous = INFINITY;
@@ -38,9 +47,11 @@ static int final_kick_velocity_dependent(struct reb_simulation* r, struct pfvi_s
         for (size_t i=0; i<N; i++){
             const double w2 = fit[i].omega*fit[i].omega;
             const double k = fit[i].half_kick;
-            const double vx = st->v_rotated[i].x + k*(ps[i].ax + w2*ps[i].x);
-            const double vy = st->v_rotated[i].y + k*(ps[i].ay + w2*ps[i].y);
-            const double vz = st->v_rotated[i].z + k*(ps[i].az + w2*ps[i].z);
+            double d[3];
+            end_offset(st, &ps[i], i, h, d);
+            const double vx = st->v_rotated[i].x + k*(ps[i].ax + w2*d[0]);
+            const double vy = st->v_rotated[i].y + k*(ps[i].ay + w2*d[1]);
+            const double vz = st->v_rotated[i].z + k*(ps[i].az + w2*d[2]);
             change = fmax(change, fmax(fabs(vx - ps[i].vx), fmax(fabs(vy - ps[i].vy), fabs(vz - ps[i].vz))));
             scale = fmax(scale, fmax(fabs(vx), fmax(fabs(vy), fabs(vz))));
             ps[i].vx = vx; ps[i].vy = vy; ps[i].vz = vz;
@@ -70,30 +81,37 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
     struct pfvi_end_state* const e = st->end;
     const int literal = (st->options.fitting == PFVI_FITTING_PHASE_LITERAL);
 
-    // Kick with the residual force, then rotate with the harmonic flow. With
-    // cos u > 0 (always at the default u_max) the whole step is an increment
-    // of x and v, added with compensated summation; "phase-literal" and
-    // cos u < 0 use plain products and drop the carried low-order parts.
+    // Kick with the residual force, then rotate with the harmonic flow about
+    // the centre c(t) = c0 + (t - t0) vc (pfvi_centre.c), in d = q - c and
+    // w = v - vc. With cos u > 0 (always at the default u_max) the whole step
+    // is an increment of x and v, added with compensated summation;
+    // "phase-literal" and cos u < 0 use plain products and drop the carried
+    // low-order parts.
     for (size_t i=0; i<N; i++){
         const struct reb_particle* const q = &p0[i];
         const double* const a = e[i].a;
         const struct pfvi_two_point_fit* const f = &st->fit[i];
         const struct pfvi_compensation* const comp = &st->compensation[i];
+        const struct pfvi_centre* const c = &st->centre[i];
+        const double d[3] = {q->x - c->x[0], q->y - c->x[1], q->z - c->x[2]};
         const double w2 = f->omega*f->omega;
-        const double kick_x = f->half_kick*(a[0] + w2*q->x);
-        const double kick_y = f->half_kick*(a[1] + w2*q->y);
-        const double kick_z = f->half_kick*(a[2] + w2*q->z);
+        const double kick_x = f->half_kick*(a[0] + w2*d[0]);
+        const double kick_y = f->half_kick*(a[1] + w2*d[1]);
+        const double kick_z = f->half_kick*(a[2] + w2*d[2]);
+        // The centre's own drift over the step less what the rotation of w
+        // moves: h vc - h sinc(u) vc.
+        const double drift = h - f->h_sinc_u;
         const double k = f->keep, rc = f->cos_u_m_keep;
         if (!literal && k == 1.){
             const double vx = q->vx + kick_x, vy = q->vy + kick_y, vz = q->vz + kick_z;
             st->dx[i] = (struct reb_vec3d){
-                (rc*q->x + f->h_sinc_u*vx) + comp->x[0],
-                (rc*q->y + f->h_sinc_u*vy) + comp->x[1],
-                (rc*q->z + f->h_sinc_u*vz) + comp->x[2]};
+                ((rc*d[0] + f->h_sinc_u*vx) + drift*c->v[0]) + comp->x[0],
+                ((rc*d[1] + f->h_sinc_u*vy) + drift*c->v[1]) + comp->x[1],
+                ((rc*d[2] + f->h_sinc_u*vz) + drift*c->v[2]) + comp->x[2]};
             st->dv[i] = (struct reb_vec3d){
-                kick_x + (rc*vx - f->omega_sin_u*q->x) + comp->v[0],
-                kick_y + (rc*vy - f->omega_sin_u*q->y) + comp->v[1],
-                kick_z + (rc*vz - f->omega_sin_u*q->z) + comp->v[2]};
+                kick_x + (rc*(vx - c->v[0]) - f->omega_sin_u*d[0]) + comp->v[0],
+                kick_y + (rc*(vy - c->v[1]) - f->omega_sin_u*d[1]) + comp->v[1],
+                kick_z + (rc*(vz - c->v[2]) - f->omega_sin_u*d[2]) + comp->v[2]};
             ps[i].x = q->x + st->dx[i].x;
             ps[i].y = q->y + st->dx[i].y;
             ps[i].z = q->z + st->dx[i].z;
@@ -102,13 +120,14 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
             ps[i].vz = q->vz + st->dv[i].z;
         }else{
             const double g = literal ? f->gamma : 1.;
-            const double vx = q->vx/g + kick_x, vy = q->vy/g + kick_y, vz = q->vz/g + kick_z;
-            ps[i].x = k*q->x + (rc*q->x + f->h_sinc_u*vx);
-            ps[i].y = k*q->y + (rc*q->y + f->h_sinc_u*vy);
-            ps[i].z = k*q->z + (rc*q->z + f->h_sinc_u*vz);
-            ps[i].vx = k*vx + (rc*vx - f->omega_sin_u*q->x);
-            ps[i].vy = k*vy + (rc*vy - f->omega_sin_u*q->y);
-            ps[i].vz = k*vz + (rc*vz - f->omega_sin_u*q->z);
+            const double wx = (q->vx - c->v[0])/g + kick_x, wy = (q->vy - c->v[1])/g + kick_y,
+                wz = (q->vz - c->v[2])/g + kick_z;
+            ps[i].x = (c->x[0] + h*c->v[0]) + (k*d[0] + (rc*d[0] + f->h_sinc_u*wx));
+            ps[i].y = (c->x[1] + h*c->v[1]) + (k*d[1] + (rc*d[1] + f->h_sinc_u*wy));
+            ps[i].z = (c->x[2] + h*c->v[2]) + (k*d[2] + (rc*d[2] + f->h_sinc_u*wz));
+            ps[i].vx = c->v[0] + (k*wx + (rc*wx - f->omega_sin_u*d[0]));
+            ps[i].vy = c->v[1] + (k*wy + (rc*wy - f->omega_sin_u*d[1]));
+            ps[i].vz = c->v[2] + (k*wz + (rc*wz - f->omega_sin_u*d[2]));
         }
     }
     const int compensated = !literal;
@@ -122,16 +141,18 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
         for (size_t i=0; i<N; i++){
             st->v_rotated[i] = (struct reb_vec3d){ps[i].vx, ps[i].vy, ps[i].vz};
         }
-        if (!final_kick_velocity_dependent(r, st, N, t0)){
+        if (!final_kick_velocity_dependent(r, st, N, t0, h)){
             return PFVI_TRIAL_ERROR;
         }
     }
     for (size_t i=0; i<N; i++){
         const struct pfvi_two_point_fit* const f = &st->fit[i];
         const double w2 = f->omega*f->omega;
-        const double kick_x = f->half_kick*(ps[i].ax + w2*ps[i].x);
-        const double kick_y = f->half_kick*(ps[i].ay + w2*ps[i].y);
-        const double kick_z = f->half_kick*(ps[i].az + w2*ps[i].z);
+        double d[3];
+        end_offset(st, &ps[i], i, h, d);
+        const double kick_x = f->half_kick*(ps[i].ax + w2*d[0]);
+        const double kick_y = f->half_kick*(ps[i].ay + w2*d[1]);
+        const double kick_z = f->half_kick*(ps[i].az + w2*d[2]);
         if (compensated && f->keep == 1.){
             st->dv[i].x += kick_x; st->dv[i].y += kick_y; st->dv[i].z += kick_z;
             ps[i].vx = p0[i].vx + st->dv[i].x;
@@ -141,9 +162,10 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
             const struct reb_vec3d vr = r->force_is_velocity_dependent ? st->v_rotated[i]
                 : (struct reb_vec3d){ps[i].vx, ps[i].vy, ps[i].vz};
             const double g = literal ? f->gamma : 1.;
-            ps[i].vx = g*(vr.x + kick_x);
-            ps[i].vy = g*(vr.y + kick_y);
-            ps[i].vz = g*(vr.z + kick_z);
+            const double* const vc = st->centre[i].v;
+            ps[i].vx = vc[0] + g*((vr.x - vc[0]) + kick_x);
+            ps[i].vy = vc[1] + g*((vr.y - vc[1]) + kick_y);
+            ps[i].vz = vc[2] + g*((vr.z - vc[2]) + kick_z);
         }
     }
     st->trial.rounds = 1;
