@@ -23,8 +23,8 @@ import ctypes as _ctypes
 from ._core import INTEGRATOR_NAME, lib as _lib
 
 __version__ = "0.1.0"
-__all__ = ["INTEGRATOR_NAME", "FITTINGS", "FREQUENCIES", "STEP_CONTROLS", "STAGES", "seed_coefficients", "gamma",
-           "two_point_coefficients", "lobatto", "stage_coefficients"]
+__all__ = ["INTEGRATOR_NAME", "FITTINGS", "FREQUENCIES", "CENTRES", "STEP_CONTROLS", "STAGES", "seed_coefficients",
+           "gamma", "two_point_coefficients", "lobatto", "stage_coefficients", "stage_differentiation"]
 
 def _option_values(field):
     """The values of an option, from the C core's one list of them."""
@@ -38,6 +38,8 @@ def _option_values(field):
 FITTINGS = _option_values("fitting")
 #: Values of the ``frequency`` field, in the order of the C enum.
 FREQUENCIES = _option_values("frequency")
+#: Values of the ``centre`` field, in the order of the C enum.
+CENTRES = _option_values("centre")
 #: Values of the ``step_control`` field, in the order of the C enum.
 STEP_CONTROLS = _option_values("step_control")
 #: Allowed values of the ``stages`` field.
@@ -150,3 +152,21 @@ def stage_coefficients(s, u):
     for k, name in enumerate(("b", "bbar", "B", "Bbar", "beta_m", "beta_d")):
         result[name] = values[2 + k * s: 2 + (k + 1) * s]
     return result
+
+
+def stage_differentiation(s, u, fitting="exact"):
+    """The differentiation matrix ``a[k, j]`` (the slope of correction function j
+    at node k) that the s-stage step of ``fitting`` uses at u = omega h.
+
+    The rule's (``lobatto(s)[2]``) for every fitting but "exact", whose
+    interior columns are corrected so that the stationarity equations hold
+    on the oscillator's exact path (docs/method.md).
+    """
+    import numpy as np
+
+    s = _check_stages(s)
+    if fitting not in FITTINGS:
+        raise ValueError(f"fitting={fitting!r} is not valid; allowed: {', '.join(FITTINGS)}")
+    out = (_ctypes.c_double * (s * s))()
+    _lib.pfvi_stage_differentiation(s, float(u), FITTINGS.index(fitting), out)
+    return np.array(out).reshape(s, s)

@@ -36,6 +36,8 @@ lib.pfvi_stage_coefficients.restype = ctypes.c_int
 lib.pfvi_stage_coefficients.argtypes = [ctypes.c_int, ctypes.c_double, ctypes.POINTER(ctypes.c_double)]
 lib.pfvi_option_value_name.restype = ctypes.c_char_p
 lib.pfvi_option_value_name.argtypes = [ctypes.c_char_p, ctypes.c_int]
+lib.pfvi_stage_differentiation.restype = ctypes.c_int
+lib.pfvi_stage_differentiation.argtypes = [ctypes.c_int, ctypes.c_double, ctypes.c_int, ctypes.POINTER(ctypes.c_double)]
 lib.pfvi_two_point_coefficients.restype = ctypes.c_int
 lib.pfvi_two_point_coefficients.argtypes = [ctypes.c_double, ctypes.c_double, ctypes.c_double,
                                             ctypes.c_int, ctypes.POINTER(ctypes.c_double)]

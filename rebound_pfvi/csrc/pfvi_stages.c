@@ -47,14 +47,25 @@ static void stage_solve_linear(const struct pfvi_lobatto* rule, const struct pfv
     const int s = rule->s, m = s - 1;
     const double q0[3] = {p0->x - centre->x[0], p0->y - centre->x[1], p0->z - centre->x[2]};
     const double v0[3] = {p0->vx - centre->v[0], p0->vy - centre->v[1], p0->vz - centre->v[2]};
+    const double h2 = h*h;
     for (int c=0; c<3; c++){
         double force = 0.;
-        for (int k=0; k<s; k++){
-            force += rule->w[k]*f->b[k]*stage_force_h2(rule, f, centre, h, sa, sx, k, c);
-        }
-        y[0][c] = -f->G*h*v0[c] - force - f->q0_row[0]*q0[c];
-        for (int j=1; j<m; j++){
-            y[j][c] = -rule->w[j]*stage_force_h2(rule, f, centre, h, sa, sx, j, c) - f->q0_row[j]*q0[c];
+        if (f->u2 == 0.){
+            for (int k=0; k<s; k++){
+                force += rule->w[k]*f->b[k]*sa[k][c];
+            }
+            y[0][c] = -f->G*h*v0[c] - h2*force - f->q0_row[0]*q0[c];
+            for (int j=1; j<m; j++){
+                y[j][c] = -h2*rule->w[j]*sa[j][c] - f->q0_row[j]*q0[c];
+            }
+        }else{
+            for (int k=0; k<s; k++){
+                force += rule->w[k]*f->b[k]*stage_force_h2(rule, f, centre, h, sa, sx, k, c);
+            }
+            y[0][c] = -f->G*h*v0[c] - force - f->q0_row[0]*q0[c];
+            for (int j=1; j<m; j++){
+                y[j][c] = -rule->w[j]*stage_force_h2(rule, f, centre, h, sa, sx, j, c) - f->q0_row[j]*q0[c];
+            }
         }
     }
     // Forward and back substitution with the stored LU factors and pivots.
