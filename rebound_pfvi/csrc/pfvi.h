@@ -247,31 +247,51 @@ struct pfvi_options {
     int centre;
 };
 
+// What the next step needs of the last one: position and velocity (compared
+// bitwise, in the order of struct reb_particle), mass, and the acceleration.
+struct pfvi_end_state {
+    double xv[6];
+    double m;
+    double a[3];
+};
+
 /* ------------------------------------------------ geometry (centre) */
 
-// The centre of one particle's harmonic model over a step, c(t0 + tau h) =
-// x + tau h v, and the partner whose attraction the particle's frequency
-// refers to (pfvi_centre.c).
+// The centre of one particle's harmonic model over a step, c(t0 + t) =
+// x + t v + t^2 acc/2, and the partner whose attraction the particle's
+// frequency refers to (pfvi_centre.c).
 struct pfvi_centre {
     double x[3];
     double v[3];
+    double acc[3];      // its acceleration, constant over the step (0 but for "partner")
+    double a[3];        // the partner's attraction on the particle (0 without a partner)
     double mu;          // G (m_i + m_partner), 0 without a partner
     size_t partner;     // SIZE_MAX: none (no other body attracts it)
 };
+// The centre's displacement and velocity t after the step's start (component k).
+static inline double pfvi_centre_shift(const struct pfvi_centre* c, double t, int k){
+    return t*c->v[k] + 0.5*t*t*c->acc[k];
+}
+static inline double pfvi_centre_velocity(const struct pfvi_centre* c, double t, int k){
+    return c->v[k] + t*c->acc[k];
+}
 // The centres of N particles of masses p[i].m at the step's start. A
 // partner is the body j != i (j < N_active) of largest G m_j / |x_j - x_i|^3,
 // the stiffest attraction on i; with gravity off, G = 0 or no other massive
 // body a particle has none, and its centre is the origin (an external
 // field is given in the simulation frame). `need_partner`: find partners
 // (the centre "partner", the frequency "mean-motion").
-PFVI_INTERNAL void pfvi_centres(const struct reb_particle* p, size_t N, size_t N_active, double G,
-        int centre, int need_partner, struct pfvi_centre* c);
+PFVI_INTERNAL void pfvi_centres(const struct reb_particle* p, const struct pfvi_end_state* start, size_t N,
+        size_t N_active, double G, int centre, int need_partner, struct pfvi_centre* c);
 // The frequency a step fits a particle to (before limiting), from its
-// position and velocity relative to its centre, d and w, its start
-// acceleration a and its centre: 0 for fitting "none", omega for "fixed",
-// |w x a|/|w|^2 for "curvature", sqrt(max(0, -a.d)/|d|^2) for "radial", the
-// osculating mean motion about its partner for "mean-motion" (0 if unbound
-// or without a partner).
+// position and velocity relative to its centre, d and w, and the
+// acceleration the model refers to: with the centre "partner", the
+// partner's attraction (the frequencies are the pair's), otherwise the
+// particle's whole start acceleration a. 0 for fitting "none", omega for
+// "fixed", |w x a|/|w|^2 for "curvature", sqrt(max(0, -a.d)/|d|^2) for
+// "radial" (about a partner G (m + m_partner)/r^3: -omega^2 d is then the
+// partner's whole attraction), the osculating mean motion about the partner
+// for "mean-motion" (0 if unbound or without a partner).
 PFVI_INTERNAL double pfvi_frequency(const struct pfvi_options* o, const struct reb_particle* p,
         const struct reb_particle* partner, const struct pfvi_centre* c, const double a[3]);
 
@@ -298,14 +318,6 @@ struct pfvi_trial_record {
     double change;                 // the stage solve's last relative change
     double omega_min;
     double omega_max;
-};
-
-// What the next step needs of the last one: position and velocity (compared
-// bitwise, in the order of struct reb_particle), mass, and the acceleration.
-struct pfvi_end_state {
-    double xv[6];
-    double m;
-    double a[3];
 };
 
 struct pfvi_compensation {

@@ -8,15 +8,22 @@
  * in a centre-of-mass frame, whose force ignores its own position, is
  * modelled as bound to the origin. Here the model is the oscillator
  *     d'' = -omega^2 d,   d = q - c(t),   c(t0 + tau h) = c0 + tau h vc,
- * about a centre moving uniformly over the step. With L(d) = |d'|^2/2 -
- * V(c + d) (a uniformly moving frame changes L by a total derivative) the
- * discrete Lagrangian of the schemes is applied to d and p - vc unchanged;
- * the centre and omega are parameters of the step, taken at its start.
+ * about a centre moving with constant acceleration over the step, c(t0 + t)
+ * = c0 + t vc + t^2 ac/2. With L(d) = |d'|^2/2 - V(c + d) - ac.d (a frame
+ * in uniform motion changes L by a total derivative; its acceleration adds
+ * the force -ac) the discrete Lagrangian of the schemes is applied to d,
+ * p - c' and the force a - ac unchanged; the centre and omega are
+ * parameters of the step, taken at its start.
  *
  * The centre "partner" refers each particle to the barycentre of itself
  * and its partner: the body j of largest G m_j / r_ij^3, the stiffest
  * attraction on it (the Hill criterion: a moon's partner is its planet,
- * not the star that pulls it harder). In a two-body problem this
+ * not the star that pulls it harder), and its frequency to the pair's
+ * relative motion under the partner's attraction alone. A planet whose
+ * moon is its stiffest attraction circles the pair's barycentre at the
+ * moon's frequency; fitted to its whole acceleration (the star's pull,
+ * almost) about that nearby centre, it would get omega ~ 1/sqrt(|d|) and
+ * lose the star (measured: benchmarks/fitting.py, part C). In a two-body problem this
  * barycentre moves uniformly and both bodies circle it at the same
  * frequency, so a circular pair is exact for both; translating and boosting
  * the whole system moves every centre with it.
@@ -29,8 +36,8 @@ static double vector_scale(const double x[3]){
     return fmax(fabs(x[0]), fmax(fabs(x[1]), fabs(x[2])));
 }
 
-void pfvi_centres(const struct reb_particle* p, size_t N, size_t N_active, double G,
-        int centre, int need_partner, struct pfvi_centre* c){
+void pfvi_centres(const struct reb_particle* p, const struct pfvi_end_state* start, size_t N,
+        size_t N_active, double G, int centre, int need_partner, struct pfvi_centre* c){
     const size_t n_attracting = (N_active < N) ? N_active : N;
     // The barycentre of the attracting bodies, for the centre "barycentre".
     double M = 0., X[3] = {0., 0., 0.}, V[3] = {0., 0., 0.};
@@ -45,7 +52,7 @@ void pfvi_centres(const struct reb_particle* p, size_t N, size_t N_active, doubl
     const int barycentre = (centre == PFVI_CENTRE_BARYCENTRE && M > 0. && isfinite(M));
     for (size_t i=0; i<N; i++){
         struct pfvi_centre* const ci = &c[i];
-        *ci = (struct pfvi_centre){{0., 0., 0.}, {0., 0., 0.}, 0., SIZE_MAX};
+        *ci = (struct pfvi_centre){{0., 0., 0.}, {0., 0., 0.}, {0., 0., 0.}, {0., 0., 0.}, 0., SIZE_MAX};
         if (need_partner && G > 0.){
             double stiffest = 0.;
             for (size_t j=0; j<n_attracting; j++){
@@ -56,14 +63,19 @@ void pfvi_centres(const struct reb_particle* p, size_t N, size_t N_active, doubl
                 const double r2 = dx*dx + dy*dy + dz*dz;
                 // m_j / r^3 compared as (m_j / r^3)^2 = m_j^2 / r^6 would
                 // overflow sooner; m_j / (r2 sqrt(r2)) is monotonic in it.
-                const double stiffness = p[j].m/(r2*sqrt(r2));
+                const double stiffness = (p[i].m + p[j].m)/(r2*sqrt(r2));
                 if (stiffness > stiffest){
                     stiffest = stiffness;
                     ci->partner = j;
                 }
             }
             if (ci->partner != SIZE_MAX){
-                ci->mu = G*(p[i].m + p[ci->partner].m);
+                const struct reb_particle* const q = &p[ci->partner];
+                const double dx = q->x - p[i].x, dy = q->y - p[i].y, dz = q->z - p[i].z;
+                const double r = sqrt(dx*dx + dy*dy + dz*dz);
+                const double pull = G*q->m/(r*r*r);
+                ci->a[0] = pull*dx; ci->a[1] = pull*dy; ci->a[2] = pull*dz;
+                ci->mu = G*(p[i].m + q->m);
             }
         }
         if (barycentre){
@@ -84,6 +96,14 @@ void pfvi_centres(const struct reb_particle* p, size_t N, size_t N_active, doubl
             ci->v[0] = fi*p[i].vx + fj*q->vx;
             ci->v[1] = fi*p[i].vy + fj*q->vy;
             ci->v[2] = fi*p[i].vz + fj*q->vz;
+            // The pair's barycentre falls with the pair: its acceleration
+            // (what the rest of the system does to the pair) moves the
+            // centre, so that d = q - c sees the partner and the tide only.
+            const double* const ai = start[i].a;
+            const double* const aj = start[ci->partner].a;
+            ci->acc[0] = fi*ai[0] + fj*aj[0];
+            ci->acc[1] = fi*ai[1] + fj*aj[1];
+            ci->acc[2] = fi*ai[2] + fj*aj[2];
         }
     }
 }
@@ -120,6 +140,12 @@ double pfvi_frequency(const struct pfvi_options* o, const struct reb_particle* p
         const struct reb_particle* partner, const struct pfvi_centre* c, const double a[3]){
     if (o->fitting == PFVI_FITTING_NONE){
         return 0.;
+    }
+    // About a partner, the pair's own motion: a planet whose partner is its
+    // moon circles their barycentre at the moon's frequency while the star's
+    // pull (its whole acceleration, almost) is the residual.
+    if (o->centre == PFVI_CENTRE_PARTNER && c->partner != SIZE_MAX){
+        a = c->a;
     }
     switch (o->frequency){
         case PFVI_FREQUENCY_FIXED:

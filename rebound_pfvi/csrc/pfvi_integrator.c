@@ -446,7 +446,7 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
     const struct pfvi_options* const o = &st->options;
     const int fitted = (o->fitting != PFVI_FITTING_NONE);
     const int need_partner = fitted && (o->centre == PFVI_CENTRE_PARTNER || o->frequency == PFVI_FREQUENCY_MEAN_MOTION);
-    pfvi_centres(p0, N, r->N_active, (r->gravity == REB_GRAVITY_NONE) ? 0. : r->G,
+    pfvi_centres(p0, e, N, r->N_active, (r->gravity == REB_GRAVITY_NONE) ? 0. : r->G,
             fitted ? o->centre : PFVI_CENTRE_ORIGIN, need_partner, st->centre);
     for (size_t i=0; i<N; i++){
         const size_t j = st->centre[i].partner;

@@ -33,11 +33,11 @@
 // the point sx where it was evaluated.
 static inline double stage_force_h2(const struct pfvi_lobatto* rule, const struct pfvi_stage_fit* f,
         const struct pfvi_centre* centre, double h, const double (*sa)[3], const double (*sx)[3], int k, int c){
-    const double h2a = h*h*sa[k][c];
+    const double h2a = h*h*(sa[k][c] - centre->acc[c]);
     if (f->u2 == 0.){
         return h2a;
     }
-    const double d = (sx[k][c] - centre->x[c]) - rule->c[k]*h*centre->v[c];
+    const double d = (sx[k][c] - centre->x[c]) - pfvi_centre_shift(centre, rule->c[k]*h, c);
     return h2a + f->u2*d;
 }
 
@@ -52,11 +52,11 @@ static void stage_solve_linear(const struct pfvi_lobatto* rule, const struct pfv
         double force = 0.;
         if (f->u2 == 0.){
             for (int k=0; k<s; k++){
-                force += rule->w[k]*f->b[k]*sa[k][c];
+                force += rule->w[k]*f->b[k]*(sa[k][c] - centre->acc[c]);
             }
             y[0][c] = -f->G*h*v0[c] - h2*force - f->q0_row[0]*q0[c];
             for (int j=1; j<m; j++){
-                y[j][c] = -h2*rule->w[j]*sa[j][c] - f->q0_row[j]*q0[c];
+                y[j][c] = -h2*rule->w[j]*(sa[j][c] - centre->acc[c]) - f->q0_row[j]*q0[c];
             }
         }else{
             for (int k=0; k<s; k++){
@@ -96,7 +96,7 @@ static void stage_solve_linear(const struct pfvi_lobatto* rule, const struct pfv
 // The step's position increment q_k+1 - q_k of one component: the change
 // of d = q - c and the centre's drift.
 static inline double stage_increment(const struct pfvi_centre* centre, const double (*y)[3], double h, int c){
-    return y[0][c] + h*centre->v[c];
+    return y[0][c] + pfvi_centre_shift(centre, h, c);
 }
 
 // Stage point k of one particle: q_k + (c^k h vc + beta_m d_k + bbar (d_k+1 - d_k)
@@ -114,7 +114,7 @@ static void stage_position(const struct pfvi_lobatto* rule, const struct pfvi_st
             x[c] = q0[c] + (stage_increment(centre, y, h, c) + comp->x[c]);
         }else{
             const double d0 = q0[c] - centre->x[c];
-            x[c] = q0[c] + ((f->beta_m[k]*d0 + f->bbar[k]*y[0][c] + y[k][c]) + rule->c[k]*h*centre->v[c]);
+            x[c] = q0[c] + ((f->beta_m[k]*d0 + f->bbar[k]*y[0][c] + y[k][c]) + pfvi_centre_shift(centre, rule->c[k]*h, c));
         }
     }
 }
@@ -150,7 +150,10 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
             if (vdep){
                 double qd[3];
                 stage_velocity_times_h(rule, &st->stage_fit[i], &st->start[i], centre, st->unknowns[i], k, qd);
-                ps[i].vx = centre->v[0] + qd[0]/h; ps[i].vy = centre->v[1] + qd[1]/h; ps[i].vz = centre->v[2] + qd[2]/h;
+                const double t = rule->c[k]*h;
+                ps[i].vx = pfvi_centre_velocity(centre, t, 0) + qd[0]/h;
+                ps[i].vy = pfvi_centre_velocity(centre, t, 1) + qd[1]/h;
+                ps[i].vz = pfvi_centre_velocity(centre, t, 2) + qd[2]/h;
             }
         }
         r->t = t0 + rule->c[k]*h;
@@ -337,7 +340,7 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
             const double wk = rule->w[k], wf = h2*(1. + f->beta_m[k]);
             for (int c=0; c<3; c++){
                 if (f->u2 == 0.){
-                    dv[c] += wk*(f->beta_d[k]*qd[c] + wf*st->stage_a[i][k][c]);
+                    dv[c] += wk*(f->beta_d[k]*qd[c] + wf*(st->stage_a[i][k][c] - centre->acc[c]));
                 }else{
                     // The harmonic part at the solved stage point, the
                     // residual where it was evaluated: as the solve used them.
@@ -353,7 +356,9 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
         double x[3];
         stage_position(rule, f, &p0[i], &st->centre[i], comp, y, h, s - 1, x);
         ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
-        const double inc_v[3] = {dv[0]/gh + comp->v[0], dv[1]/gh + comp->v[1], dv[2]/gh + comp->v[2]};
+        // w_k+1 - w_k, and the centre's velocity change h ac.
+        const double inc_v[3] = {(dv[0]/gh + h*centre->acc[0]) + comp->v[0], (dv[1]/gh + h*centre->acc[1]) + comp->v[1],
+            (dv[2]/gh + h*centre->acc[2]) + comp->v[2]};
         ps[i].vx = p0[i].vx + inc_v[0];
         ps[i].vy = p0[i].vy + inc_v[1];
         ps[i].vz = p0[i].vz + inc_v[2];

@@ -31,12 +31,12 @@ static double two_point_fitted_omega(const struct pfvi_state* st, size_t i){
 // The position of particle i relative to its centre at the end of a step of h.
 static void end_offset(const struct pfvi_state* st, const struct reb_particle* p, size_t i, double h, double d[3]){
     const struct pfvi_centre* const c = &st->centre[i];
-    d[0] = (p->x - c->x[0]) - h*c->v[0];
-    d[1] = (p->y - c->x[1]) - h*c->v[1];
-    d[2] = (p->z - c->x[2]) - h*c->v[2];
+    d[0] = (p->x - c->x[0]) - pfvi_centre_shift(c, h, 0);
+    d[1] = (p->y - c->x[1]) - pfvi_centre_shift(c, h, 1);
+    d[2] = (p->z - c->x[2]) - pfvi_centre_shift(c, h, 2);
 }
 
-// Implicit final kick for velocity-dependent forces: v = vr + k (a(q, v) + omega^2 d),
+// Implicit final kick for velocity-dependent forces: v = vr + k (a(q, v) - ac + omega^2 d),
 // by fixed-point iteration under the common stopping rule.
 static int final_kick_velocity_dependent(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){
     struct reb_particle* const ps = r->particles;
@@ -49,9 +49,10 @@ static int final_kick_velocity_dependent(struct reb_simulation* r, struct pfvi_s
             const double k = fit[i].half_kick;
             double d[3];
             end_offset(st, &ps[i], i, h, d);
-            const double vx = st->v_rotated[i].x + k*(ps[i].ax + w2*d[0]);
-            const double vy = st->v_rotated[i].y + k*(ps[i].ay + w2*d[1]);
-            const double vz = st->v_rotated[i].z + k*(ps[i].az + w2*d[2]);
+            const double* const ac = st->centre[i].acc;
+            const double vx = st->v_rotated[i].x + k*((ps[i].ax - ac[0]) + w2*d[0]);
+            const double vy = st->v_rotated[i].y + k*((ps[i].ay - ac[1]) + w2*d[1]);
+            const double vz = st->v_rotated[i].z + k*((ps[i].az - ac[2]) + w2*d[2]);
             change = fmax(change, fmax(fabs(vx - ps[i].vx), fmax(fabs(vy - ps[i].vy), fabs(vz - ps[i].vz))));
             scale = fmax(scale, fmax(fabs(vx), fmax(fabs(vy), fabs(vz))));
             ps[i].vx = vx; ps[i].vy = vy; ps[i].vz = vz;
@@ -95,23 +96,25 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
         const struct pfvi_centre* const c = &st->centre[i];
         const double d[3] = {q->x - c->x[0], q->y - c->x[1], q->z - c->x[2]};
         const double w2 = f->omega*f->omega;
-        const double kick_x = f->half_kick*(a[0] + w2*d[0]);
-        const double kick_y = f->half_kick*(a[1] + w2*d[1]);
-        const double kick_z = f->half_kick*(a[2] + w2*d[2]);
-        // The centre's own drift over the step less what the rotation of w
-        // moves: h vc - h sinc(u) vc.
+        const double kick_x = f->half_kick*((a[0] - c->acc[0]) + w2*d[0]);
+        const double kick_y = f->half_kick*((a[1] - c->acc[1]) + w2*d[1]);
+        const double kick_z = f->half_kick*((a[2] - c->acc[2]) + w2*d[2]);
+        // The centre's own motion over the step less what the rotation of
+        // w = v - vc moves: (h - h sinc u) vc + h^2 ac/2.
         const double drift = h - f->h_sinc_u;
+        const double shift[3] = {drift*c->v[0] + 0.5*h*h*c->acc[0], drift*c->v[1] + 0.5*h*h*c->acc[1],
+            drift*c->v[2] + 0.5*h*h*c->acc[2]};
         const double k = f->keep, rc = f->cos_u_m_keep;
         if (!literal && k == 1.){
             const double vx = q->vx + kick_x, vy = q->vy + kick_y, vz = q->vz + kick_z;
             st->dx[i] = (struct reb_vec3d){
-                ((rc*d[0] + f->h_sinc_u*vx) + drift*c->v[0]) + comp->x[0],
-                ((rc*d[1] + f->h_sinc_u*vy) + drift*c->v[1]) + comp->x[1],
-                ((rc*d[2] + f->h_sinc_u*vz) + drift*c->v[2]) + comp->x[2]};
+                ((rc*d[0] + f->h_sinc_u*vx) + shift[0]) + comp->x[0],
+                ((rc*d[1] + f->h_sinc_u*vy) + shift[1]) + comp->x[1],
+                ((rc*d[2] + f->h_sinc_u*vz) + shift[2]) + comp->x[2]};
             st->dv[i] = (struct reb_vec3d){
-                kick_x + (rc*(vx - c->v[0]) - f->omega_sin_u*d[0]) + comp->v[0],
-                kick_y + (rc*(vy - c->v[1]) - f->omega_sin_u*d[1]) + comp->v[1],
-                kick_z + (rc*(vz - c->v[2]) - f->omega_sin_u*d[2]) + comp->v[2]};
+                (kick_x + (rc*(vx - c->v[0]) - f->omega_sin_u*d[0]) + h*c->acc[0]) + comp->v[0],
+                (kick_y + (rc*(vy - c->v[1]) - f->omega_sin_u*d[1]) + h*c->acc[1]) + comp->v[1],
+                (kick_z + (rc*(vz - c->v[2]) - f->omega_sin_u*d[2]) + h*c->acc[2]) + comp->v[2]};
             ps[i].x = q->x + st->dx[i].x;
             ps[i].y = q->y + st->dx[i].y;
             ps[i].z = q->z + st->dx[i].z;
@@ -122,12 +125,12 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
             const double g = literal ? f->gamma : 1.;
             const double wx = (q->vx - c->v[0])/g + kick_x, wy = (q->vy - c->v[1])/g + kick_y,
                 wz = (q->vz - c->v[2])/g + kick_z;
-            ps[i].x = (c->x[0] + h*c->v[0]) + (k*d[0] + (rc*d[0] + f->h_sinc_u*wx));
-            ps[i].y = (c->x[1] + h*c->v[1]) + (k*d[1] + (rc*d[1] + f->h_sinc_u*wy));
-            ps[i].z = (c->x[2] + h*c->v[2]) + (k*d[2] + (rc*d[2] + f->h_sinc_u*wz));
-            ps[i].vx = c->v[0] + (k*wx + (rc*wx - f->omega_sin_u*d[0]));
-            ps[i].vy = c->v[1] + (k*wy + (rc*wy - f->omega_sin_u*d[1]));
-            ps[i].vz = c->v[2] + (k*wz + (rc*wz - f->omega_sin_u*d[2]));
+            ps[i].x = (c->x[0] + pfvi_centre_shift(c, h, 0)) + (k*d[0] + (rc*d[0] + f->h_sinc_u*wx));
+            ps[i].y = (c->x[1] + pfvi_centre_shift(c, h, 1)) + (k*d[1] + (rc*d[1] + f->h_sinc_u*wy));
+            ps[i].z = (c->x[2] + pfvi_centre_shift(c, h, 2)) + (k*d[2] + (rc*d[2] + f->h_sinc_u*wz));
+            ps[i].vx = pfvi_centre_velocity(c, h, 0) + (k*wx + (rc*wx - f->omega_sin_u*d[0]));
+            ps[i].vy = pfvi_centre_velocity(c, h, 1) + (k*wy + (rc*wy - f->omega_sin_u*d[1]));
+            ps[i].vz = pfvi_centre_velocity(c, h, 2) + (k*wz + (rc*wz - f->omega_sin_u*d[2]));
         }
     }
     const int compensated = !literal;
@@ -150,9 +153,10 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
         const double w2 = f->omega*f->omega;
         double d[3];
         end_offset(st, &ps[i], i, h, d);
-        const double kick_x = f->half_kick*(ps[i].ax + w2*d[0]);
-        const double kick_y = f->half_kick*(ps[i].ay + w2*d[1]);
-        const double kick_z = f->half_kick*(ps[i].az + w2*d[2]);
+        const struct pfvi_centre* const c = &st->centre[i];
+        const double kick_x = f->half_kick*((ps[i].ax - c->acc[0]) + w2*d[0]);
+        const double kick_y = f->half_kick*((ps[i].ay - c->acc[1]) + w2*d[1]);
+        const double kick_z = f->half_kick*((ps[i].az - c->acc[2]) + w2*d[2]);
         if (compensated && f->keep == 1.){
             st->dv[i].x += kick_x; st->dv[i].y += kick_y; st->dv[i].z += kick_z;
             ps[i].vx = p0[i].vx + st->dv[i].x;
@@ -162,7 +166,8 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
             const struct reb_vec3d vr = r->force_is_velocity_dependent ? st->v_rotated[i]
                 : (struct reb_vec3d){ps[i].vx, ps[i].vy, ps[i].vz};
             const double g = literal ? f->gamma : 1.;
-            const double* const vc = st->centre[i].v;
+            const double vc[3] = {pfvi_centre_velocity(c, h, 0), pfvi_centre_velocity(c, h, 1),
+                pfvi_centre_velocity(c, h, 2)};
             ps[i].vx = vc[0] + g*((vr.x - vc[0]) + kick_x);
             ps[i].vy = vc[1] + g*((vr.y - vc[1]) + kick_y);
             ps[i].vz = vc[2] + g*((vr.z - vc[2]) + kick_z);
