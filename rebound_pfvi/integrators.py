@@ -22,6 +22,11 @@ if TYPE_CHECKING:
 #: The integrator families the comparisons know.
 FAMILIES = ("pfvi", "ias15", "whfast", "leapfrog", "bs")
 
+#: pfvi's frequency and centre as the seed prints its scheme (K&V: the
+#: curvature frequency, the harmonic model about the coordinate origin);
+#: with fitting "phase" or "phase-literal" they reproduce its figures.
+SEED_MODEL = {"frequency": "curvature", "centre": "origin"}
+
 
 def _fields(sim: rebound.Simulation) -> set:
     """The settable fields of sim's integrator (REBOUND's field descriptors)."""

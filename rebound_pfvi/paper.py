@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
-from .integrators import configure as configure_integrator
+from .integrators import SEED_MODEL, configure as configure_integrator
 from .report import fmt
 from .scenes import kepler_relative, orbit_elements
 
@@ -55,7 +55,8 @@ def one_period(e: float, epsilon: float, fitting: str, stages: int = 2,
     sim = seed_problem(e)
     period = sim.particles[1].P
     E0 = _specific_energy(sim)
-    configure_integrator(sim, "pfvi", fitting=fitting, stages=stages, step_control=step_control, epsilon=epsilon)
+    configure_integrator(sim, "pfvi", fitting=fitting, stages=stages, step_control=step_control, epsilon=epsilon,
+                         **SEED_MODEL)
     worst = 0.0
     # Step by step, so that the largest error is seen; the last step lands on
     # the period (REBOUND's exact_finish_time).
@@ -230,7 +231,7 @@ counted.
 
 def _pfvi(sim, stages, epsilon, step_control, fitting="phase"):
     configure_integrator(sim, "pfvi", dt=sim.particles[1].P / 100.0, stages=stages, fitting=fitting,
-                         step_control=step_control, epsilon=epsilon)
+                         step_control=step_control, epsilon=epsilon, **SEED_MODEL)
 
 
 def curvature_frequency(p: rebound.Particle) -> float:
