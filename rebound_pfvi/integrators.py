@@ -25,7 +25,7 @@ FAMILIES = ("pfvi", "ias15", "whfast", "leapfrog", "bs")
 #: pfvi's frequency and centre as the seed prints its scheme (K&V: the
 #: curvature frequency, the harmonic model about the coordinate origin);
 #: with fitting "phase" or "phase-literal" they reproduce its figures.
-SEED_MODEL = {"frequency": "curvature", "centre": "origin"}
+SEED_MODEL: dict[str, Any] = {"frequency": "curvature", "centre": "origin"}
 
 
 def _fields(sim: rebound.Simulation) -> set:

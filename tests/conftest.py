@@ -18,9 +18,20 @@ def snapshot(sim):
     return sim.t, particle_bytes(sim)
 
 
-def fixed_step_pfvi(sim):
-    """pfvi with fixed steps of sim.dt and the two-point scheme (s = 2), unless a test sets others."""
+def seed_pfvi(sim):
+    """pfvi with the seed's scheme: fitting "phase" with the curvature frequency
+    about the origin (the defaults until issue 14; most tests of the seed's
+    method were written against it)."""
     sim.integrator = "pfvi"
+    sim.integrator.fitting = "phase"
+    sim.integrator.frequency = "curvature"
+    sim.integrator.centre = "origin"
+
+
+def fixed_step_pfvi(sim):
+    """pfvi with the seed's scheme, fixed steps of sim.dt and the two-point
+    scheme (s = 2), unless a test sets others."""
+    seed_pfvi(sim)
     sim.integrator.epsilon = 0.
     sim.integrator.stages = 2
 

@@ -4,7 +4,7 @@ import math
 import pytest
 import rebound
 
-from conftest import snapshot
+from conftest import seed_pfvi, snapshot
 
 CONTROLS = ["seed", "reversible"]
 FIELDS = ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az", "m")
@@ -20,7 +20,7 @@ def eccentric(e=0.9, stages=2, fitting="phase", step_control="seed", epsilon=1e-
     sim.add(m=1.0)
     sim.add(m=1e-3, a=1.0, e=e)
     sim.move_to_com()
-    sim.integrator = "pfvi"
+    seed_pfvi(sim)
     sim.integrator.stages = stages
     sim.integrator.fitting = fitting
     sim.integrator.step_control = step_control

@@ -73,7 +73,7 @@ def test_fields_survive_save_and_load(tmp_path, fitting, stages):
     sim.save_to_file(path)
     loaded = rebound.Simulation(path)
     assert str(loaded.integrator) == "pfvi"
-    for field in ("fitting", "frequency", "omega", "stages", "u_max", "n_steps",
+    for field in ("fitting", "frequency", "centre", "omega", "stages", "u_max", "n_steps",
                   "n_u_limited", "n_force_evaluations", "omega_min", "omega_max",
                   "n_iterations", "iterations_max", "iterations_mean"):
         assert getattr(loaded.integrator, field) == getattr(sim.integrator, field), field
@@ -162,6 +162,6 @@ def test_documentation_lists_every_field():
                   "omega_min", "omega_max"):
         assert f"{field} :" in doc
     assert "'phase-literal'" in doc
-    assert (sim.integrator.fitting, sim.integrator.frequency, sim.integrator.stages,
+    assert (sim.integrator.fitting, sim.integrator.frequency, sim.integrator.centre, sim.integrator.stages,
             sim.integrator.u_max, sim.integrator.omega, sim.integrator.epsilon,
-            sim.integrator.step_control) == ("phase", "curvature", 4, 1.0, 0.0, 1e-6, "reversible")
+            sim.integrator.step_control) == ("none", "radial", "partner", 4, 1.0, 0.0, 1e-6, "reversible")

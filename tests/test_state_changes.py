@@ -4,7 +4,7 @@ the same as starting afresh from the changed state."""
 import pytest
 import rebound
 
-from conftest import STEP_MODES, two_body
+from conftest import STEP_MODES, seed_pfvi, two_body
 
 FIELDS = ("x", "y", "z", "vx", "vy", "vz", "m")
 MODES = STEP_MODES
@@ -12,7 +12,7 @@ MODES = STEP_MODES
 
 def configure(sim, mode):
     stages, epsilon, step_control = MODES[mode]
-    sim.integrator = "pfvi"
+    seed_pfvi(sim)
     sim.integrator.stages = stages
     sim.integrator.epsilon = epsilon
     sim.integrator.step_control = step_control

@@ -60,7 +60,7 @@
 #define PFVI_CENTRES(X) \
     X(PFVI_CENTRE_ORIGIN, 0, "origin")          /* K&V: the coordinate origin, at rest */ \
     X(PFVI_CENTRE_BARYCENTRE, 1, "barycentre")  /* the barycentre of the massive bodies */ \
-    X(PFVI_CENTRE_PARTNER, 2, "partner")        /* the barycentre of the particle and its partner (the body of largest G m / r^3) */
+    X(PFVI_CENTRE_PARTNER, 2, "partner")        /* the barycentre of the particle and its partner (the tightest pair, largest G (m + m_j) / r^3) */
 
 #define PFVI_STEP_CONTROLS(X) \
     X(PFVI_STEP_CONTROL_SEED, 0, "seed")              /* accept/reject on the estimate, propose the next h */ \
@@ -276,8 +276,8 @@ static inline double pfvi_centre_velocity(const struct pfvi_centre* c, double t,
     return c->v[k] + t*c->acc[k];
 }
 // The centres of N particles of masses p[i].m at the step's start. A
-// partner is the body j != i (j < N_active) of largest G m_j / |x_j - x_i|^3,
-// the stiffest attraction on i; with gravity off, G = 0 or no other massive
+// partner is the body j != i (j < N_active) of largest G (m_i + m_j) / |x_j - x_i|^3,
+// the tightest pair i is in; with gravity off, G = 0 or no other massive
 // body a particle has none, and its centre is the origin (an external
 // field is given in the simulation frame). `need_partner`: find partners
 // (the centre "partner", the frequency "mean-motion").

@@ -16,9 +16,9 @@
  * parameters of the step, taken at its start.
  *
  * The centre "partner" refers each particle to the barycentre of itself
- * and its partner: the body j of largest G m_j / r_ij^3, the stiffest
- * attraction on it (the Hill criterion: a moon's partner is its planet,
- * not the star that pulls it harder), and its frequency to the pair's
+ * and its partner: the body j of largest G (m_i + m_j) / r_ij^3, the
+ * tightest pair it is in (the Hill criterion: a moon's partner is its
+ * planet, not the star that pulls it harder), and its frequency to the pair's
  * relative motion under the partner's attraction alone. A planet whose
  * moon is its stiffest attraction circles the pair's barycentre at the
  * moon's frequency; fitted to its whole acceleration (the star's pull,

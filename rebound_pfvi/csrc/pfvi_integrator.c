@@ -28,9 +28,11 @@ const struct reb_integrator pfvi_integrator = {
     "D. S. Vlachos, \"Phase-fitted Discrete Lagrangian Integrators\" (below: K&V). The discrete "
     "Lagrangian Ld = h sum_j w_j L(q^j, qdot^j) interpolates each particle's path "
     "with trigonometric functions fitted to a local frequency omega, so that the "
-    "harmonic oscillator at omega is integrated exactly. The frequency is either "
-    "estimated from the curvature of the orbit, omega = |v x a|/|v|^2 (the angular "
-    "rate on the osculating circle), or given. Steps are the position-momentum "
+    "harmonic oscillator at omega is integrated exactly (fitting 'phase' at two nodes, "
+    "'exact' at every s; off by default: 'none'). The frequency is estimated from the "
+    "orbit (the pull of its partner, the curvature of the path, the osculating mean "
+    "motion) or given, about a centre (the particle's pair barycentre by default, or K&V's "
+    "coordinate origin). Steps are the position-momentum "
     "form p_k = -D1 Ld, p_k+1 = D2 Ld (Marsden & West 2001, Acta Numerica 10, 357). "
     "With two nodes (stages = 2) the step is explicit and second order, needs one "
     "force evaluation (the acceleration at the end of a step is reused at the start "
@@ -77,7 +79,10 @@ static struct reb_binarydata_enum_descriptor pfvi_centre_enum[] = { PFVI_CENTRES
 #define PFVI_STATISTIC(doc, dtype, name) PFVI_FIELD("Statistic: " doc, dtype, statistics, name)
 
 static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[] = {
-    { "Fitting of the discrete Lagrangian. 'phase' (default): K&V's phase-fitted "
+    { "Fitting of the discrete Lagrangian. 'none' (default): the classical trapezoidal Ld of "
+      "Marsden & West (velocity Verlet), and for stages >= 3 the classical Lobatto Ld; under the "
+      "adaptive step control (the default) fitting changes neither the steps nor the error and "
+      "costs time (docs/method.md), so it is off. 'phase': K&V's phase-fitted "
       "Ld divided by gamma(u) = u cot u, which makes positions and momenta exact on the "
       "harmonic oscillator with two nodes, but not for stages >= 3 (the interior corrections, "
       "polynomial, move the stage points off the oscillator's path). 'exact': 'phase' with each "
@@ -85,40 +90,44 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "stationarity equations hold on the oscillator's exact path: exact on the oscillator at "
       "every s, of order 2s - 2, and the same as 'phase' at s = 2. 'phase-literal': Ld exactly as "
       "printed by K&V; positions are exact on the oscillator (two nodes) but momenta come out "
-      "scaled by gamma(u). 'none': the classical trapezoidal Ld of Marsden & West (velocity "
-      "Verlet), and for stages >= 3 the classical Lobatto Ld. The seed's schemes as printed are "
-      "'phase' and 'phase-literal' with centre = 'origin' and frequency = 'curvature'. "
-      "Type: text (REBOUND lists its storage type). Default 'phase'.",
+      "scaled by gamma(u). With fixed steps 'exact' with the default frequency and centre is the "
+      "most accurate (docs/results/fitting.md). The seed's schemes as printed are 'phase' and "
+      "'phase-literal' with centre = 'origin' and frequency = 'curvature'. "
+      "Type: text (REBOUND lists its storage type). Default 'none'.",
       REB_INT, "fitting", offsetof(struct pfvi_state, options.fitting), 0, 0, pfvi_fitting_enum },
     { "Source of the frequency omega, per particle, at the start of each step, from its "
       "position d and velocity w relative to its centre (see centre) and its acceleration a. "
-      "'curvature' (default; K&V, 'Frequency Evaluation and Error Control'): |w x a|/|w|^2, the "
-      "angular rate on the osculating circle; 0 on a straight line or at rest. 'radial': "
-      "sqrt(-a.d)/|d|, so that the harmonic part -omega^2 d carries the whole pull towards the "
-      "centre at the step's start (0 if a points away from it). 'mean-motion': the mean motion "
+      "With the centre 'partner', a is the partner's attraction: the frequencies are the pair's. "
+      "'radial' (default): sqrt(-a.d)/|d|, so that the harmonic part -omega^2 d carries the whole "
+      "pull towards the centre at the step's start (about a partner, G (m + m_partner)/r^3: its "
+      "whole attraction); 0 if a points away from it. With fixed steps it drifts in energy at high e "
+      "(docs/method.md). 'curvature' (K&V, 'Frequency Evaluation and Error Control'): "
+      "|w x a|/|w|^2, the angular rate on the osculating circle; 0 on a straight line or at rest. "
+      "'mean-motion': the mean motion "
       "sqrt(mu/A^3) of the osculating two-body orbit about the particle's partner (the body of "
-      "largest G m/r^3; mu = G (m + m_partner)), a constant of the unperturbed two-body motion; 0 if "
-      "unbound or without a partner. 'fixed': the field omega, for every particle. Type: text. "
-      "Default 'curvature'.",
+      "largest G (m + m_j)/r^3; mu = G (m + m_partner)), a constant of the unperturbed two-body motion; 0 if "
+      "unbound or without a partner; no drift with fixed steps. 'fixed': the field omega, for every "
+      "particle. Type: text. Default 'radial'.",
       REB_INT, "frequency", offsetof(struct pfvi_state, options.frequency), 0, 0, pfvi_frequency_enum },
     { "The centre of each particle's harmonic model: the fitted interpolation is applied to "
-      "d = q - c(t), with c moving uniformly over the step from its position and velocity at the "
-      "start. 'origin' (default; K&V): the coordinate origin, at rest, so the step depends on the "
-      "inertial frame. 'barycentre': the barycentre of the massive bodies (frame-free). 'partner': "
-      "the barycentre of the particle and its partner, the body j of largest G m_j/r^3 (the "
-      "stiffest attraction on it: a moon's planet, a planet's star, a star's planet), "
-      "frame-free and exact for both bodies of a circular pair. With gravity off, G = 0 or no "
-      "other massive body (an external field) a particle's centre is the origin. Not used with "
-      "fitting 'none'. Type: text. Default 'origin'.",
+      "d = q - c(t), with c moving over the step from its position, velocity and acceleration at "
+      "the start. 'partner' (default): the barycentre of the particle and its partner, the body j of "
+      "largest G (m + m_j)/r^3 (the tightest pair: a moon's planet, a star's planet, a planet's "
+      "star or its moon), falling with the pair's acceleration over the step, so that d sees the "
+      "partner and the tide only; frame-free, and exact for both bodies of a circular pair. "
+      "'barycentre': the barycentre of the massive bodies, uniformly moving (frame-free). 'origin' "
+      "(K&V): the coordinate origin, at rest, so the step depends on the inertial frame. With "
+      "gravity off, G = 0 or no other massive body (an external field) a particle's centre is the "
+      "origin. Not used with fitting 'none'. Type: text. Default 'partner'.",
       REB_INT, "centre", offsetof(struct pfvi_state, options.centre), 0, 0, pfvi_centre_enum },
     PFVI_OPTION("Frequency used when frequency = 'fixed' (code units of 1/time, finite, >= 0). Default 0.",
         REB_DOUBLE, omega),
     PFVI_OPTION("Number s of Gauss-Lobatto nodes of the discrete Lagrangian, an integer from "
         PFVI_STR(PFVI_STAGES_MIN) " to " PFVI_STR(PFVI_STAGES_MAX) "; the order is "
         "2s - 2. s = 2: nodes 0 and 1, an explicit step with one force evaluation; with "
-        "'phase' it is unstable for a body whose force ignores its own position (the star in a "
-        "centre-of-mass frame: its offset from the origin grows by 1/cos u per step). s = 4 "
-        "(default): order 6, stable there. s >= 3: interior corrections delta q^j made stationary "
+        "'phase' about the origin it is unstable for a body whose force ignores its own position "
+        "(the star in a centre-of-mass frame: its offset from the origin grows by 1/cos u per step); "
+        "about its partner (centre 'partner') it is not. s = 4 (default): order 6. s >= 3: interior corrections delta q^j made stationary "
         "(K&V, 'Increasing the algebraic order'), solved by "
         "fixed-point iteration with s - 1 force evaluations per iteration (s if forces depend "
         "on velocities), at most " PFVI_STR(PFVI_ITERATION_MAX) " iterations per step. "
@@ -210,14 +219,14 @@ static void* pfvi_create(void){
         return NULL;
     }
     st->options = (struct pfvi_options){
-        .fitting = PFVI_FITTING_PHASE,
-        .frequency = PFVI_FREQUENCY_CURVATURE,
+        .fitting = PFVI_FITTING_NONE,
+        .frequency = PFVI_FREQUENCY_RADIAL,
         .stages = PFVI_STAGES_DEFAULT,
         .omega = 0.,
         .u_max = PFVI_U_MAX_DEFAULT,
         .epsilon = PFVI_EPSILON_DEFAULT,
         .step_control = PFVI_STEP_CONTROL_REVERSIBLE,
-        .centre = PFVI_CENTRE_ORIGIN,
+        .centre = PFVI_CENTRE_PARTNER,
     };
     return st;
 }
