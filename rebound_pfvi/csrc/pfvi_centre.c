@@ -20,10 +20,11 @@
  * tightest pair it is in (the Hill criterion: a moon's partner is its
  * planet, not the star that pulls it harder), and its frequency to the pair's
  * relative motion under the partner's attraction alone. A planet whose
- * moon is its stiffest attraction circles the pair's barycentre at the
- * moon's frequency; fitted to its whole acceleration (the star's pull,
- * almost) about that nearby centre, it would get omega ~ 1/sqrt(|d|) and
- * lose the star (measured: benchmarks/fitting.py, part C). In a two-body problem this
+ * moon makes the tightest pair circles the pair's barycentre at the moon's
+ * frequency; fitted to its whole acceleration (the star's pull, almost)
+ * about that nearby centre, it would get omega ~ 1/sqrt(|d|) and lose the
+ * star (measured: benchmarks/fitting.py, part C, 0.15 of the moon's
+ * distance after one orbit of the planet). In a two-body problem this
  * barycentre moves uniformly and both bodies circle it at the same
  * frequency, so a circular pair is exact for both; translating and boosting
  * the whole system moves every centre with it.
