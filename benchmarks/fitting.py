@@ -30,6 +30,11 @@ C. A hierarchical system: star 1, planet 1e-3 at a = 1 (e = 0.05), moon
 D. Long-term energy: e = 0.95, P/2000 steps, 2000 orbits, s = 2 and 4: the
    largest relative energy error in the first and last tenth, sampled 20
    times per orbit.
+E. Under the default adaptive step control (reversible, epsilon 1e-6 and
+   1e-9, s = 4 and 6): steps, final position error and wall time (best of
+   2) of "none", the seed's "phase" and "exact radial" on Kepler e = 0.5,
+   0.9, 0.95 (20 periods), the comet and the triple (1 period): what the
+   default fitting is chosen from.
 --quick: fewer cases and shorter runs (a smoke test of the script, not the
 page's figures).
 """
@@ -225,6 +230,34 @@ def long_term(stages: Sequence[int], orbits: int, per_orbit: int) -> List[Dict[s
     return rows
 
 
+def adaptive(epsilons: Sequence[float], stages: Sequence[int], periods: float) -> List[Dict[str, Any]]:
+    from rebound_pfvi.scenes import Comet, Triple
+
+    rows = []
+    scenes = [Kepler(e=e, periods=20*periods) for e in (0.5, 0.9, 0.95)] + [Comet(periods=periods),
+                                                                            Triple(periods=periods)]
+    for scene in scenes:
+        reference = scene.reference()
+        for epsilon in epsilons:
+            for s in stages:
+                for scheme in (NONE, SCHEMES[0], SCHEMES[2]):
+                    _, fitting, frequency, centre = scheme
+                    best, sim = math.inf, None
+                    for _ in range(2):
+                        sim = scene.build()
+                        configure(sim, "pfvi", dt=scene.period/100, stages=s, epsilon=epsilon, fitting=fitting,
+                                  frequency=frequency, centre=centre)
+                        start = time.perf_counter()
+                        sim.integrate(scene.t_end, exact_finish_time=1)
+                        best = min(best, time.perf_counter() - start)
+                    assert sim is not None
+                    rows.append({"scene": scene.slug, "epsilon": epsilon, "s": s, "scheme": scheme[0],
+                                 "steps": sim.integrator.n_steps, "error": scene.position_error(sim, reference),
+                                 "seconds": best})
+                    print(f"E {rows[-1]}", file=sys.stderr)
+    return rows
+
+
 def _g(x: Optional[float], digits: int = 2) -> str:
     if x is None:
         return "-"
@@ -233,7 +266,7 @@ def _g(x: Optional[float], digits: int = 2) -> str:
     return f"{x:.{digits}g}"
 
 
-def markdown(A, B, C, D, args, seconds: float) -> str:
+def markdown(A, B, C, D, E, args, seconds: float) -> str:
     labels = [sch[0] for sch in SCHEMES]
     out = ["# What fitting buys: measured", "",
            f"Produced by `python -P benchmarks/fitting.py{' --quick' if args.quick else ''}` "
@@ -274,6 +307,18 @@ def markdown(A, B, C, D, args, seconds: float) -> str:
     for r in D:
         out.append(f"| {r['s']} | {r['scheme']} | {r['first']:.2e} | {r['last']:.2e} | "
                    f"{r['last']/r['first'] if r['first'] > 0 else math.nan:.2f} | {r['seconds']:.1f} |")
+    out += ["", "## E. The default adaptive step control (reversible): what fitting changes there", "",
+            "Final position error [AU] and wall time (best of 2) at the steps the osculating-circle estimate "
+            "chose; time relative to \"none\" in brackets.", "",
+            "| scene | epsilon | s | steps (none / phase / exact) | none | seed phase | exact radial |",
+            "|---|---|---|---|---|---|---|"]
+    for k in range(0, len(E), 3):
+        group = E[k:k + 3]
+        base = group[0]["seconds"]
+        out.append(f"| {group[0]['scene']} | {group[0]['epsilon']:g} | {group[0]['s']} | "
+                   + " / ".join(str(r["steps"]) for r in group) + " | "
+                   + " | ".join(f"{r['error']:.1e}, {r['seconds']:.3f} s ({r['seconds']/base:.2f})" for r in group)
+                   + " |")
     return "\n".join(out) + "\n"
 
 
@@ -295,7 +340,9 @@ def main(argv: Optional[Sequence[str]] = None) -> None:
     B = steps_at_equal_energy(ecc_b, stages_b, args.target, args.orbits_b)
     C = hierarchical((2, 4), moon_orbits)
     D = long_term((2, 4) if not args.quick else (4,), args.orbits_d, args.per_orbit_d)
-    page = markdown(A, B, C, D, args, time.perf_counter() - start)
+    E = adaptive((1e-6,) if args.quick else (1e-6, 1e-9), (4,) if args.quick else (4, 6),
+                 0.2 if args.quick else 1.0)
+    page = markdown(A, B, C, D, E, args, time.perf_counter() - start)
     if args.output:
         with open(args.output, "w") as f:
             f.write(page)
