@@ -33,12 +33,18 @@ def run_python(code, timeout=120):
                           text=True, timeout=timeout)
 
 
-@pytest.mark.parametrize("stages", [2, 3, 4, 5, 6])
-def test_archive_round_trip_in_a_fresh_process_is_bit_identical(tmp_path, stages):
+@pytest.mark.parametrize("stages, fitting", [(2, "phase"), (3, "phase"), (4, "phase"), (5, "phase"), (6, "phase"),
+                                             (2, "exact"), (4, "exact"), (6, "exact")])
+def test_archive_round_trip_in_a_fresh_process_is_bit_identical(tmp_path, stages, fitting):
     # For s >= 3 this needs the last step's stage accelerations, which seed
-    # the next solve: they are saved with the simulation.
+    # the next solve, and for "exact" the positions they were evaluated at:
+    # both are saved with the simulation.
     archive = tmp_path / "run.bin"
     sim = setup_sim(stages)
+    if fitting == "exact":
+        sim.integrator.fitting = "exact"
+        sim.integrator.frequency = "radial"
+        sim.integrator.centre = "partner"
     sim.integrate(7.3)
     sim.save_to_file(str(archive))
     sim.integrate(20.0)
@@ -47,7 +53,7 @@ def test_archive_round_trip_in_a_fresh_process_is_bit_identical(tmp_path, stages
         import rebound, rebound_pfvi
         sim = rebound.Simulation({str(archive)!r})
         assert str(sim.integrator) == "pfvi"
-        assert sim.integrator.u_max == 0.8 and sim.integrator.fitting == "phase"
+        assert sim.integrator.u_max == 0.8 and sim.integrator.fitting == {fitting!r}
         assert sim.integrator.stages == {stages}
         sim.integrate(20.0)
         print(" ".join(repr(getattr(p, f)) for p in sim.particles for f in {STATE!r}))
@@ -62,10 +68,12 @@ def test_archive_round_trip_in_a_fresh_process_is_bit_identical(tmp_path, stages
 
 
 @pytest.mark.parametrize("stages", [2, 4])
-@pytest.mark.parametrize("fitting", ["phase", "phase-literal", "none"])
-def test_fields_survive_save_and_load(tmp_path, fitting, stages):
+@pytest.mark.parametrize("fitting, centre", [("phase", "origin"), ("phase-literal", "origin"), ("none", "origin"),
+                                             ("exact", "partner"), ("exact", "barycentre")])
+def test_fields_survive_save_and_load(tmp_path, fitting, centre, stages):
     sim = setup_sim(stages)
     sim.integrator.fitting = fitting
+    sim.integrator.centre = centre
     sim.integrator.frequency = "fixed"
     sim.integrator.omega = 0.25
     sim.integrate(1.0)
@@ -156,7 +164,7 @@ def test_documentation_lists_every_field():
     sim.integrator = "pfvi"
     doc = " ".join(sim.integrator.__doc__.split())
     assert "Kosmas and D. S. Vlachos, \"Phase-fitted Discrete Lagrangian Integrators\"" in doc
-    for field in ("fitting", "frequency", "omega", "stages", "u_max", "epsilon", "step_control",
+    for field in ("fitting", "frequency", "centre", "omega", "stages", "u_max", "epsilon", "step_control",
                   "n_steps", "n_u_limited", "n_force_evaluations", "n_iterations", "iterations_max",
                   "iterations_mean", "n_rejected", "n_attempts", "n_asymmetric", "error_estimate",
                   "omega_min", "omega_max"):
