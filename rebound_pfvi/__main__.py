@@ -223,7 +223,7 @@ class Progress:
             self.bar.refresh()
 
     def __call__(self, done: int, total: int, run: Optional["Run"] = None) -> None:
-        """compare's and paper's callback: `done` of `total` finished, `run` the last one."""
+        """compare's, stability's and paper's callback: `done` of `total` finished, `run` the last one."""
         if run is not None:
             self.finished_one(run.name, not run.finished)
         self.bar.update(done - self.bar.n)
@@ -368,16 +368,8 @@ def run_stability(args: argparse.Namespace, argv: List[str]) -> int:
     print(f"{len(names)} cases x {len(configs)} integrators = {total} runs, {args.workers} at once, "
           f"budget {args.budget:g} s each", flush=True)
     bar = Progress(total)
-    jobs = [(name, config.label) for name in names for config in configs]
-
-    def progress(index, outcome):
-        name, label = jobs[index]
-        failed = outcome[0] != "ok" or not outcome[1].status.startswith("finished")
-        bar.finished_one(f"{name}: {label}", failed)
-        bar.bar.update(1)
-
     try:
-        report = stability.run_all(names, configs, budget=args.budget, workers=args.workers, progress=progress)
+        report = stability.run_all(names, configs, budget=args.budget, workers=args.workers, progress=bar)
     except KeyboardInterrupt:
         print("\nInterrupted: nothing written.", file=sys.stderr)
         return 130

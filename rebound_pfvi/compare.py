@@ -15,11 +15,14 @@ Each setting is run by :func:`run_setting`, which
 3. gives the run its verdict (:mod:`rebound_pfvi.verdict`: accurate,
    inaccurate, refused, crashed) against the scene's tolerance.
 
-:func:`run` sends the settings to a local process pool (default), to a Dask
-``distributed`` scheduler (``scheduler="tcp://..."``), or runs them in this
-process (``workers=1``). Every run is a :class:`rebound_pfvi.runs.Run`. Runs
-that share cores are timed under the same load; compare wall times within one
-sweep, not across machines or sweeps.
+:func:`run` sends the settings to local worker processes (default; see
+:mod:`rebound_pfvi.runner`: a run that crashes its process is recorded as
+"crashed", one still busy a minute after its budget is killed and recorded as
+"over budget"), to a Dask ``distributed`` scheduler
+(``scheduler="tcp://..."``), or runs them in this process (``workers=1``).
+Every run is a :class:`rebound_pfvi.runs.Run`. Runs that share cores are timed
+under the same load; compare wall times within one sweep, not across machines
+or sweeps.
 
 Everything here is unitless (AU, yr, Msun); :class:`Results` converts to
 astropy Quantities at the boundary.
@@ -28,12 +31,11 @@ from __future__ import annotations
 
 import math
 import os
-import signal
 import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
-from . import runs, verdict
+from . import runner, runs, verdict
 from .integrators import FAMILIES
 from .integrators import configure as configure_integrator
 from .runs import ProgressCallback, Run
@@ -281,16 +283,6 @@ def judge(scene: Scene, run: Run) -> Tuple[str, str]:
     return runs.judge(run, getattr(scene, "tolerance", verdict.DEFAULT))
 
 
-def _task(args):
-    index, scene, setting, reference, repeats, samples, budget = args
-    return index, run_setting(scene, setting, reference, repeats, samples, budget)
-
-
-def _ignore_sigint():
-    # Ctrl-C belongs to the parent, which stops the pool and keeps what finished.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
 @dataclass
 class Results:
     """The runs of a sweep and what is needed to read them."""
@@ -336,7 +328,9 @@ def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int
     here). scheduler: the address of a Dask distributed scheduler, or a
     ``distributed.Client``. progress(done, total, run) is called after each run.
     budget: seconds of wall time per setting (see :func:`run_setting`; None:
-    no limit).
+    no limit); in the local pool a run still busy
+    :data:`rebound_pfvi.runner.GRACE_SECONDS` after its budget is killed
+    ("over budget"), and a run whose process dies is "crashed".
     Ctrl-C stops the sweep and returns the finished runs with
     ``interrupted=True``.
     """
@@ -352,15 +346,22 @@ def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int
     if budget is not None and not (isinstance(budget, (int, float)) and budget > 0 and math.isfinite(budget)):
         raise ValueError(f"budget={budget!r} must be a positive number of seconds (or None)")
     reference = scene.reference()
-    tasks = [(i, scene, s, reference, int(repeats), int(samples), budget) for i, s in enumerate(settings)]
+    # The hard limit: a run still busy GRACE_SECONDS after its budget is killed (in a worker process;
+    # nothing can kill a run in this one).
+    limit = None if budget is None else budget + runner.GRACE_SECONDS
+    tasks = [runner.Task(run_setting, (scene, s, reference, int(repeats), int(samples), budget), limit)
+             for s in settings]
     done: Dict[int, Run] = {}
     interrupted = False
     tick = time.perf_counter()
 
-    def record(index: int, row: Run) -> None:
-        done[index] = row
+    def record(index: int, outcome: runner.Outcome) -> None:
+        run = runs.from_outcome(_identity(scene, settings[index]), outcome)
+        if not run.verdict:  # its process did not return it
+            run.verdict, run.verdict_detail = judge(scene, run)
+        done[index] = run
         if progress:
-            progress(len(done), len(tasks), row)
+            progress(len(done), len(tasks), run)
 
     if scheduler is None:
         workers = int(workers or os.cpu_count() or 1)
@@ -369,65 +370,15 @@ def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int
         workers, where = 0, "dask"  # known once connected
     try:
         if scheduler is not None:
-            workers, where = _run_dask(tasks, scheduler, record)
-        elif workers == 1:
-            for task in tasks:
-                record(*_task(task))
+            _, workers, where = runner.run_tasks_dask(tasks, scheduler, record)
         else:
-            _run_pool(tasks, workers, record)
+            runner.run_tasks(tasks, workers, processes=workers > 1, done=record)
+    except runner.WorkerStartError as error:
+        raise RuntimeError("workers: a worker process died before returning its run (a script that calls "
+                           "compare.run() needs an `if __name__ == '__main__':` guard, since workers import "
+                           "it; workers=1 runs in this process)") from error
     except KeyboardInterrupt:
         interrupted = True
     rows = [done[i] for i in sorted(done)]
     return Results(scene, settings, rows, reference, int(repeats), int(samples), workers, where,
                    time.perf_counter() - tick, interrupted, budget)
-
-
-def _run_pool(tasks, workers, record):
-    import multiprocessing
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-    from concurrent.futures.process import BrokenProcessPool
-
-    # spawn: workers start clean, without this process's ctypes callbacks. An
-    # executor, not multiprocessing.Pool: a worker that dies (a script without
-    # a __main__ guard, a crash in C) breaks it with an error; Pool would
-    # start replacements forever.
-    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"), initializer=_ignore_sigint)
-    try:
-        pending = {pool.submit(_task, task) for task in tasks}
-        while pending:
-            done, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for future in done:
-                record(*future.result())
-    except BrokenProcessPool as error:
-        raise RuntimeError("workers: a worker process died before returning its run (a script that calls "
-                           "compare.run() needs an `if __name__ == '__main__':` guard, since workers import "
-                           "it; or the run crashed; workers=1 runs in this process)") from error
-    except BaseException:  # Ctrl-C or a failure in the parent: stop the workers now
-        for process in list(getattr(pool, "_processes", {}).values()):
-            process.terminate()
-        raise
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
-
-
-def _run_dask(tasks, scheduler, record):
-    try:
-        from distributed import Client, as_completed
-    except ImportError:
-        raise ImportError("scheduler: sending runs to Dask needs the [dask] extra: "
-                          "pip install 'rebound_pfvi[dask]'") from None
-    client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
-    address = client.scheduler.address
-    try:
-        workers = len(client.scheduler_info()["workers"])
-        futures = [client.submit(_task, task, pure=False) for task in tasks]
-        try:
-            for future in as_completed(futures):
-                record(*future.result())
-        except KeyboardInterrupt:
-            client.cancel(futures)
-            raise
-    finally:
-        if client is not scheduler:
-            client.close()
-    return workers, f"dask {address}"

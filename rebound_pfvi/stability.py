@@ -3,15 +3,16 @@
 ``rebound-pfvi stability`` runs every case of :data:`CASES` with pfvi (every
 fitting, s = 2 and 4, adaptive steps unless the case prescribes fixed ones)
 beside IAS15 and WHFast. Every run is a separate process with a wall-time
-budget, so that a run which crashes, hangs or crawls becomes a row of the
-report ("crashed", "killed", "stopped by the budget") instead of taking the
-report down with it. Every row is a :class:`rebound_pfvi.runs.Run`, and
-gives: the verdict (accurate, inaccurate, refused, crashed, over budget;
-:mod:`rebound_pfvi.verdict`, judged against the case's tolerance) with its
-detail, the time reached, the relative energy error (final and largest over
-100 checkpoints), the position error against a reference at the time
-reached, steps, wall time, and what the integrator reported (u limited,
-steps rejected, asymmetric reversible steps).
+budget (:mod:`rebound_pfvi.runner`, ``fresh=True``), so that a run which
+crashes, hangs or crawls becomes a row of the report ("crashed", "killed",
+"stopped by the budget") instead of taking the report down with it. Every row
+is a :class:`rebound_pfvi.runs.Run`, and gives: the verdict (accurate,
+inaccurate, refused, crashed, over budget; :mod:`rebound_pfvi.verdict`,
+judged against the case's tolerance) with its detail, the time reached, the
+relative energy error (final and largest over 100 checkpoints), the position
+error against a reference at the time reached, steps, wall time, and what
+the integrator reported (u limited, steps rejected, asymmetric reversible
+steps).
 
 Units are AU, yr and Msun (G from REBOUND) unless a case says otherwise.
 References: the exact two-body solution where there is one (REBOUND's
@@ -22,31 +23,25 @@ infall); otherwise IAS15 at epsilon 1e-11, with its distance to a run at
 from __future__ import annotations
 
 import math
-import multiprocessing
 import threading
 import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
-from . import runs, scenes, verdict
+from . import runner, runs, scenes, verdict
 from .integrators import configure as configure_integrator
-from .runs import Run
+from .runs import ProgressCallback, Run
 
 if TYPE_CHECKING:
     import rebound
 
-#: A job of :func:`run_isolated`: a module-level function and its arguments.
-Job = Tuple[Callable[..., Any], Tuple[Any, ...]]
-#: What became of a job: ("ok", result) | ("error", message) | ("crashed", exit code) | ("killed", seconds).
-Outcome = Tuple[str, Any]
 Vector = Tuple[float, float, float]
 
 FITTINGS = ("phase", "phase-literal", "none")
 STAGES = (2, 4)
 CHECKPOINTS = 100
-#: A run still busy this long after its budget is killed (the step under
-#: way when the budget runs out is finished first).
-GRACE_SECONDS = 60.0
+#: A run still busy this long after its budget is killed (see rebound_pfvi.runner).
+GRACE_SECONDS = runner.GRACE_SECONDS
 
 
 @dataclass
@@ -518,77 +513,6 @@ def _reference_pair(case_name: str, t: float) -> Dict[str, Any]:
             "check": reference_positions(case_name, t, scenes.REFERENCE_CHECK_EPSILON)}
 
 
-def _child(conn, job):
-    function, args = job
-    try:
-        conn.send(("ok", function(*args)))
-    except BaseException as error:  # noqa: BLE001 - reported to the parent, which records it
-        conn.send(("error", f"{type(error).__name__}: {error}"))
-    finally:
-        conn.close()
-
-
-@dataclass
-class _Slot:
-    process: Any  # multiprocessing's process and connection
-    conn: Any
-    job: Job
-    index: int
-    deadline: float
-
-
-def run_isolated(jobs: Sequence[Job], workers: int = 2, hard_limits: Optional[Sequence[float]] = None,
-                 progress: Optional[Callable[[int, Outcome], None]] = None) -> List[Outcome]:
-    """Runs each job, a (module-level function, args) pair, in a fresh process,
-    at most `workers` at once.
-
-    Returns a list of ("ok", result) | ("error", message) | ("crashed", exit
-    code) | ("killed", seconds), one per job, in order. A job is killed once
-    its hard limit (seconds) has passed.
-    """
-    ctx = multiprocessing.get_context("spawn")
-    results: List[Outcome] = [("error", "not run")] * len(jobs)  # each replaced when its job ends
-    pending = list(range(len(jobs)))
-    running: List[_Slot] = []
-    try:
-        while pending or running:
-            while pending and len(running) < max(1, workers):
-                i = pending.pop(0)
-                parent, child = ctx.Pipe(duplex=False)
-                process = ctx.Process(target=_child, args=(child, jobs[i]), daemon=True)
-                process.start()
-                child.close()
-                limit = hard_limits[i] if hard_limits else None
-                running.append(_Slot(process, parent, jobs[i], i,
-                                     time.monotonic() + limit if limit else math.inf))
-            for slot in list(running):
-                outcome = None
-                if slot.conn.poll(0.02):
-                    try:
-                        outcome = slot.conn.recv()
-                    except EOFError:
-                        slot.process.join()
-                        outcome = ("crashed", slot.process.exitcode)
-                elif not slot.process.is_alive():
-                    slot.process.join()
-                    outcome = ("crashed", slot.process.exitcode)
-                elif time.monotonic() > slot.deadline:
-                    slot.process.kill()
-                    outcome = ("killed", hard_limits[slot.index] if hard_limits else math.inf)
-                if outcome is not None:
-                    slot.process.join()
-                    slot.conn.close()
-                    running.remove(slot)
-                    results[slot.index] = outcome
-                    if progress:
-                        progress(slot.index, outcome)
-    finally:
-        for slot in running:
-            slot.process.kill()
-            slot.process.join()
-    return results
-
-
 @dataclass
 class Report:
     """The runs of every case with every config, and the references they were judged against."""
@@ -623,9 +547,10 @@ def what_happened(row: Run) -> str:
 
 
 def run_all(case_names: Optional[Sequence[str]] = None, configs: Optional[Sequence[Config]] = None,
-            budget: float = 60.0, workers: int = 2,
-            progress: Optional[Callable[[int, Outcome], None]] = None) -> Report:
-    """Every case x every config, each run isolated; references first."""
+            budget: float = 60.0, workers: int = 2, progress: Optional[ProgressCallback] = None) -> Report:
+    """Every case x every config, each run in a process of its own (rebound_pfvi.runner);
+    references first. progress(done, total, run) is called as each run ends (before it is judged:
+    the runs are judged once all have ended)."""
     table = cases()
     names = list(case_names) if case_names else list(table)
     for name in names:
@@ -634,8 +559,9 @@ def run_all(case_names: Optional[Sequence[str]] = None, configs: Optional[Sequen
     configs = configs or default_configs()
     tick = time.perf_counter()
     references = {}
-    ref_jobs = [(_reference_pair, (n, table[n].t_end)) for n in names if table[n].reference_kind == "ias15"]
-    for (_, (name, _t)), outcome in zip(ref_jobs, run_isolated(ref_jobs, workers)):
+    integrated = [n for n in names if table[n].reference_kind == "ias15"]
+    ref_tasks = [runner.Task(_reference_pair, (n, table[n].t_end)) for n in integrated]
+    for name, outcome in zip(integrated, runner.run_tasks(ref_tasks, workers, fresh=True)):
         if outcome[0] != "ok":
             raise RuntimeError(f"the IAS15 reference of case {name} failed: {outcome}")
         best, check = outcome[1]["best"], outcome[1]["check"]
@@ -646,10 +572,19 @@ def run_all(case_names: Optional[Sequence[str]] = None, configs: Optional[Sequen
         if table[name].reference_kind != "ias15":
             references[name] = {"uncertainty": 0.0, "how": "exact" if table[name].reference_kind == "kepler"
                                 else "exact (radial Kepler equation)"}
-    jobs: List[Job] = [(run, (n, c, budget)) for n in names for c in configs]
-    outcomes = run_isolated(jobs, workers, hard_limits=[budget + GRACE_SECONDS] * len(jobs), progress=progress)
+    pairs = [(n, c) for n in names for c in configs]
+    tasks = [runner.Task(run, (n, c, budget), budget + GRACE_SECONDS) for n, c in pairs]
+    ended = 0
+
+    def record(index: int, outcome: runner.Outcome) -> None:
+        nonlocal ended
+        ended += 1
+        if progress:
+            progress(ended, len(tasks), runs.from_outcome(_identity(*pairs[index], budget), outcome))
+
+    outcomes = runner.run_tasks(tasks, workers, fresh=True, done=record)
     rows = []
-    for (_, (name, config, _b)), outcome in zip(jobs, outcomes):
+    for (name, config), outcome in zip(pairs, outcomes):
         case = table[name]
         row = runs.from_outcome(_identity(name, config, budget), outcome)
         if row.positions is not None and row.finite:
