@@ -19,6 +19,7 @@ that uses it. The method: Kosmas & Vlachos, "Phase-fitted Discrete Lagrangian
 Integrators"; docs/method.md.
 """
 import ctypes as _ctypes
+from typing import Any, Dict, Tuple
 
 from ._core import INTEGRATOR_NAME, lib as _lib
 
@@ -80,7 +81,7 @@ def _check_stages(s):
     return int(s)
 
 
-def seed_coefficients(u, c):
+def seed_coefficients(u: float, c: float) -> Tuple[float, ...]:
     """The seed's fitted interpolation coefficients (b, bbar, B, Bbar) at node c.
 
     ``q^j = b q_k + bbar q_k+1`` and ``h qdot^j = B q_k + Bbar q_k+1`` with
@@ -91,13 +92,13 @@ def seed_coefficients(u, c):
     return tuple(out)
 
 
-def gamma(u):
+def gamma(u: float) -> float:
     """gamma(u) = u cot(u): the factor by which the printed two-point Ld scales
     the exact discrete Lagrangian of the oscillator, and its momenta."""
     return _lib.pfvi_gamma(float(u))
 
 
-def two_point_coefficients(omega, h, u_max=1.0, fitting="phase"):
+def two_point_coefficients(omega: float, h: float, u_max: float = 1.0, fitting: str = "phase") -> Dict[str, Any]:
     """Coefficients of one two-point step, as used by the C core.
 
     Returns a dict with omega (after limiting), cos_u, h_sinc_u,
@@ -113,12 +114,12 @@ def two_point_coefficients(omega, h, u_max=1.0, fitting="phase"):
     if status < 0:
         raise ValueError(f"omega*h = {omega * h!r} lies at a pole of the two-point coefficients")
     keys = ("omega", "cos_u", "h_sinc_u", "omega_sin_u", "half_kick", "gamma")
-    result = dict(zip(keys, out))
+    result: Dict[str, Any] = dict(zip(keys, out))
     result["limited"] = bool(status == 1)
     return result
 
 
-def lobatto(s):
+def lobatto(s: int) -> Tuple[Any, Any, Any]:
     """The Gauss-Lobatto rule of the s-stage discrete Lagrangian, as the C core computes it.
 
     Returns numpy arrays ``(c, w, a)``: nodes on [0, 1], weights, and the
@@ -133,7 +134,7 @@ def lobatto(s):
     return np.array(c), np.array(w), np.array(a).reshape(s, s)
 
 
-def stage_coefficients(s, u):
+def stage_coefficients(s: int, u: float) -> Dict[str, Any]:
     """The fitted stage coefficients of the s-stage step at u = omega h.
 
     Returns a dict of numpy arrays over the nodes: the seed's ``b``, ``bbar``,
@@ -148,7 +149,7 @@ def stage_coefficients(s, u):
     out = (_ctypes.c_double * (2 + 6 * s))()
     _lib.pfvi_stage_coefficients(s, float(u), out)
     values = np.array(out)
-    result = {"gamma": float(values[0]), "det_ratio": float(values[1])}
+    result: Dict[str, Any] = {"gamma": float(values[0]), "det_ratio": float(values[1])}
     for k, name in enumerate(("b", "bbar", "B", "Bbar", "beta_m", "beta_d")):
         result[name] = values[2 + k * s: 2 + (k + 1) * s]
     return result

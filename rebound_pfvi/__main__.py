@@ -10,7 +10,10 @@ import os
 import shlex
 import sys
 import threading
-from typing import Any, Dict, List, Optional, TextIO
+from typing import TYPE_CHECKING, Any, Dict, List, Optional, Sequence, TextIO
+
+if TYPE_CHECKING:
+    from .runs import Run
 
 # Scene parameters: option -> (scene keyword, kind of quantity, scenes that take it, help).
 SCENE_OPTIONS = {
@@ -219,11 +222,10 @@ class Progress:
         while not self._stop.wait(1.0):
             self.bar.refresh()
 
-    def __call__(self, done: int, total: int, row: Optional[Dict[str, Any]] = None) -> None:
-        """compare's and paper's callback: `done` of `total` finished, `row` the last one."""
-        if row is not None:
-            self.finished_one(f"{row['line']} {row['knob']}={row['value']:g}",
-                              row.get("verdict") in ("refused", "crashed", "over budget"))
+    def __call__(self, done: int, total: int, run: Optional["Run"] = None) -> None:
+        """compare's, stability's and paper's callback: `done` of `total` finished, `run` the last one."""
+        if run is not None:
+            self.finished_one(run.name, not run.finished)
         self.bar.update(done - self.bar.n)
         if done >= total:
             self.close()
@@ -290,8 +292,8 @@ def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv:
     if results.interrupted:
         print(f"\nInterrupted: {results.finished} of {len(settings)} runs finished and kept.", file=sys.stderr)
     print(f"Wrote {', '.join(paths.values())} ({results.wall_s:.1f} s)")
-    _print_verdicts(results.verdict_counts(), results.rows, "line")
-    warned = [r for r in results.rows if r.get("warnings")]
+    _print_verdicts(results.verdict_counts(), results.rows)
+    warned = [r for r in results.rows if r.warnings]
     if warned:
         print(f"REBOUND warned in {len(warned)} run(s), explained in the page's Warnings section:")
         print(report.warnings_section(warned))
@@ -366,16 +368,8 @@ def run_stability(args: argparse.Namespace, argv: List[str]) -> int:
     print(f"{len(names)} cases x {len(configs)} integrators = {total} runs, {args.workers} at once, "
           f"budget {args.budget:g} s each", flush=True)
     bar = Progress(total)
-    jobs = [(name, config.label) for name in names for config in configs]
-
-    def progress(index, outcome):
-        name, label = jobs[index]
-        failed = outcome[0] != "ok" or not outcome[1]["status"].startswith("finished")
-        bar.finished_one(f"{name}: {label}", failed)
-        bar.bar.update(1)
-
     try:
-        report = stability.run_all(names, configs, budget=args.budget, workers=args.workers, progress=progress)
+        report = stability.run_all(names, configs, budget=args.budget, workers=args.workers, progress=bar)
     except KeyboardInterrupt:
         print("\nInterrupted: nothing written.", file=sys.stderr)
         return 130
@@ -384,24 +378,22 @@ def run_stability(args: argparse.Namespace, argv: List[str]) -> int:
     command = invocation(argv)
     paths = report_module.write_stability(report, args.output, command=command)
     print(f"Wrote {', '.join(map(str, paths))} ({report.wall_s:.0f} s)")
-    _print_verdicts(report_module.stability_verdict_counts(report), report.rows, "integrator")
+    _print_verdicts(report_module.stability_verdict_counts(report), report.rows)
     return 0
 
 
-def _print_verdicts(counts: Dict[str, Dict[str, int]], rows: List[Dict[str, Any]], key: str) -> None:
+def _print_verdicts(counts: Dict[str, Dict[str, int]], rows: Sequence["Run"]) -> None:
     """The verdicts counted per integrator, then every run that did not finish, with its whole message."""
-    from .verdict import ACCURATE, INACCURATE, text_counts
+    from .verdict import text_counts
 
     print("Verdicts (accurate: finished within the tolerance; see the report):")
     for line in text_counts(counts):
         print("  " + line)
-    failed = [r for r in rows if r["verdict"] not in (ACCURATE, INACCURATE)]
+    failed = [r for r in rows if not r.finished]
     if failed:
         print(f"{len(failed)} run(s) did not finish:")
         for r in failed:
-            where = f"{r['case']}: " if "case" in r else ""
-            knob = f" {r['knob']}={r['value']:g}" if "knob" in r else ""
-            print(f"- {where}{r[key]}{knob}: {r['verdict']}: {r['verdict_detail']}")
+            print(f"- {r.name}: {r.verdict}: {r.verdict_detail}")
 
 
 def main(argv: Optional[List[str]] = None) -> int:

@@ -15,10 +15,14 @@ Each setting is run by :func:`run_setting`, which
 3. gives the run its verdict (:mod:`rebound_pfvi.verdict`: accurate,
    inaccurate, refused, crashed) against the scene's tolerance.
 
-:func:`run` sends the settings to a local process pool (default), to a Dask
-``distributed`` scheduler (``scheduler="tcp://..."``), or runs them in this
-process (``workers=1``). Runs that share cores are timed under the same load;
-compare wall times within one sweep, not across machines or sweeps.
+:func:`run` sends the settings to local worker processes (default; see
+:mod:`rebound_pfvi.runner`: a run that crashes its process is recorded as
+"crashed", one still busy a minute after its budget is killed and recorded as
+"over budget"), to a Dask ``distributed`` scheduler
+(``scheduler="tcp://..."``), or runs them in this process (``workers=1``).
+Every run is a :class:`rebound_pfvi.runs.Run`. Runs that share cores are timed
+under the same load; compare wall times within one sweep, not across machines
+or sweeps.
 
 Everything here is unitless (AU, yr, Msun); :class:`Results` converts to
 astropy Quantities at the boundary.
@@ -27,23 +31,19 @@ from __future__ import annotations
 
 import math
 import os
-import signal
 import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
+from . import runner, runs, verdict
 from .integrators import FAMILIES
 from .integrators import configure as configure_integrator
+from .runs import ProgressCallback, Run
 
 if TYPE_CHECKING:
     import rebound
 
     from .scenes import Scene
-
-#: A row of results: one run of one setting (see :func:`run_setting`).
-Row = Dict[str, Any]
-#: progress(done, total, row), called after each run.
-ProgressCallback = Callable[[int, int, Row], None]
 
 #: The accuracy knob of each family, as the table and plot call it.
 KNOBS = {"pfvi": "epsilon", "ias15": "epsilon", "bs": "eps", "whfast": "steps/period",
@@ -142,13 +142,13 @@ def configure(sim: rebound.Simulation, scene: Scene, setting: Setting) -> None:
 
 def _install_counter(sim: rebound.Simulation, scene: Scene, counter: List[int]) -> None:
     if not scene.counts_own_forces:
-        def count(simp):
+        def count(simp: Any) -> None:
             counter[0] += 1
 
         sim.additional_forces = count
 
 
-#: What REBOUND's warnings mean for a row, for the page and the command line.
+#: What REBOUND's warnings mean for a run, for the page and the command line.
 WARNING_MEANINGS = {
     "predictor corrector loops in IAS15 did not converge":
         "IAS15's predictor-corrector iteration hit its limit in 10 or more steps, REBOUND's sign that the "
@@ -165,8 +165,8 @@ def explain_warning(message: str) -> str:
 
 
 def run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repeats: int = 3,
-                samples: int = 100, budget: Optional[float] = None) -> Row:
-    """One row of results for `setting` on `scene` (see the module docstring).
+                samples: int = 100, budget: Optional[float] = None) -> Run:
+    """The run of `setting` on `scene` (see the module docstring).
 
     budget: seconds of wall time for the whole setting (its timed repeats and
     the sampled rerun); a run still integrating then is stopped from a timer
@@ -174,15 +174,21 @@ def run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repea
     "over budget". None: no limit.
 
     Warnings raised during the runs (IAS15's "predictor corrector loops did
-    not converge" at loose tolerances) are kept in the row's "warnings", not
+    not converge" at loose tolerances) are kept in the run's ``warnings``, not
     printed from the worker process."""
     import warnings
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        row = _run_setting(scene, setting, reference, repeats, samples, budget)
-    row["warnings"] = sorted({str(w.message) for w in caught})
-    return row
+        run = _run_setting(scene, setting, reference, repeats, samples, budget)
+    run.warnings = sorted({str(w.message) for w in caught})
+    return run
+
+
+def _identity(scene: Scene, setting: Setting) -> Run:
+    """A run of `setting` on `scene` before it has run."""
+    return Run(runs.COMPARE, scene.name, setting.family, setting.line, options=dict(setting.options),
+               knob=setting.knob, value=setting.value)
 
 
 class _OverBudget(Exception):
@@ -218,9 +224,9 @@ def _integrate(sim: rebound.Simulation, t: float, exact_finish_time: int, deadli
 
 
 def _run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repeats: int, samples: int,
-                 budget: Optional[float] = None) -> Row:
-    row: Row = {"scene": scene.name, "family": setting.family, "line": setting.line, "knob": setting.knob,
-           "value": setting.value, "options": dict(setting.options), "status": "ok"}
+                 budget: Optional[float] = None) -> Run:
+    run = _identity(scene, setting)
+    run.status = "ok"
     t_end = scene.t_end
     deadline = None if budget is None else time.perf_counter() + budget
     t0 = 0.0
@@ -239,15 +245,13 @@ def _run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repe
             tick = time.perf_counter()
             _integrate(sim, t_end, 1, deadline, fraction)
             walls.append(time.perf_counter() - tick)
-        row.update(wall_s=min(walls), walls_s=walls, steps=int(sim.steps_done), t_final=float(sim.t),
-                   energy_error_final=abs(scene.energy(sim) / E0 - 1.0),
-                   position_error=scene.position_error(sim, reference),
-                   relative_position_error=scene.relative_position_error(sim, reference))
+        final = abs(scene.energy(sim) / E0 - 1.0)
+        position = scene.position_error(sim, reference)
+        relative = scene.relative_position_error(sim, reference)
+        run.wall_s, run.walls_s, run.steps, run.t = min(walls), walls, int(sim.steps_done), float(sim.t)
+        run.energy_error_final, run.position_error, run.relative_position_error = final, position, relative
         if setting.family == "pfvi":
-            row.update(pfvi_force_evaluations=int(sim.integrator.n_force_evaluations),
-                       attempts_per_step=int(sim.integrator.n_attempts) / max(1, int(sim.integrator.n_steps)),
-                       iterations_mean=float(sim.integrator.iterations_mean),
-                       n_rejected=int(sim.integrator.n_rejected))
+            run.pfvi = runs.pfvi_counts(sim)
         # Untimed: sampled energy error and counted force evaluations.
         counter = [0]
         sim = scene.build(counter=counter)
@@ -262,55 +266,30 @@ def _run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repe
         else:
             _integrate(sim, t_end, 1, deadline, fraction)
         worst = max(worst, abs(scene.energy(sim) / E0 - 1.0))
-        row.update(energy_error_max=worst, force_evaluations=counter[0])
-        values = (row["energy_error_final"], row["position_error"], worst)
-        if not all(math.isfinite(v) for v in values):
-            row["status"] = "diverged (non-finite energy or position)"
+        run.energy_error_max, run.force_evaluations = worst, counter[0]
+        if not all(math.isfinite(v) for v in (final, position, worst)):
+            run.status = "diverged (non-finite energy or position)"
     except _OverBudget as stopped:
-        row["status"] = f"over budget: stopped by the budget of {budget:g} s at {stopped.args[0]:.3g} of a run"
+        run.status = f"over budget: stopped by the budget of {budget:g} s at {stopped.args[0]:.3g} of a run"
     except Exception as error:  # noqa: BLE001 - a refused or failed run is a result, recorded with its message
-        row["status"] = f"failed: {type(error).__name__}: {error}"
-    row["verdict"], row["verdict_detail"] = judge(scene, row)
-    return row
+        run.status = f"failed: {type(error).__name__}: {error}"
+    run.verdict, run.verdict_detail = judge(scene, run)
+    return run
 
 
-def judge(scene: Scene, row: Row) -> Tuple[str, str]:
-    """(verdict, detail) of a row (:mod:`rebound_pfvi.verdict`), against the
-    scene's ``tolerance`` if it has one, else the default."""
-    from . import verdict
-
-    status = row["status"]
-    if status == "ok":
-        return verdict.judge(row["energy_error_max"], row.get("relative_position_error"),
-                             getattr(scene, "tolerance", verdict.DEFAULT))
-    if status.startswith("diverged"):
-        return verdict.INACCURATE, status
-    if status.startswith("over budget: "):
-        return verdict.OVER_BUDGET, status[len("over budget: "):]
-    error = status[len("failed: "):] if status.startswith("failed: ") else status
-    kind = verdict.of_exception(error)
-    if kind == verdict.REFUSED:
-        return kind, error[len("RuntimeError: "):]
-    return kind, error
-
-
-def _task(args):
-    index, scene, setting, reference, repeats, samples, budget = args
-    return index, run_setting(scene, setting, reference, repeats, samples, budget)
-
-
-def _ignore_sigint():
-    # Ctrl-C belongs to the parent, which stops the pool and keeps what finished.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+def judge(scene: Scene, run: Run) -> Tuple[str, str]:
+    """(verdict, detail) of a run (:func:`rebound_pfvi.runs.judge`), against
+    the scene's ``tolerance`` if it has one, else the default."""
+    return runs.judge(run, getattr(scene, "tolerance", verdict.DEFAULT))
 
 
 @dataclass
 class Results:
-    """The rows of a sweep and what is needed to read them."""
+    """The runs of a sweep and what is needed to read them."""
 
     scene: Scene
     settings: List[Setting]
-    rows: List[Row]
+    rows: List[Run]
     reference: Dict[str, Any]
     repeats: int
     samples: int
@@ -326,9 +305,7 @@ class Results:
 
     def verdict_counts(self) -> Dict[str, Dict[str, int]]:
         """{line: {verdict: runs}} (a line is an integrator with its options, e.g. "pfvi s=4 phase")."""
-        from .verdict import count
-
-        return count(self.rows, "line")
+        return runs.count(self.rows)
 
     def to_dict(self) -> Dict[str, Any]:
         """Everything the sweep found, as JSON-ready data (report.results_dict)."""
@@ -345,14 +322,16 @@ class Results:
 def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int = 3, samples: int = 100,
         workers: Optional[int] = None, scheduler: Any = None,
         progress: Optional[ProgressCallback] = None, budget: Optional[float] = None) -> Results:
-    """Runs a sweep; returns :class:`Results` (rows in the order of `settings`).
+    """Runs a sweep; returns :class:`Results` (runs in the order of `settings`).
 
     workers: processes of the local pool (default: the machine's cores; 1 runs
     here). scheduler: the address of a Dask distributed scheduler, or a
-    ``distributed.Client``. progress(done, total, row) is called after each run.
+    ``distributed.Client``. progress(done, total, run) is called after each run.
     budget: seconds of wall time per setting (see :func:`run_setting`; None:
-    no limit).
-    Ctrl-C stops the sweep and returns the finished rows with
+    no limit); in the local pool a run still busy
+    :data:`rebound_pfvi.runner.GRACE_SECONDS` after its budget is killed
+    ("over budget"), and a run whose process dies is "crashed".
+    Ctrl-C stops the sweep and returns the finished runs with
     ``interrupted=True``.
     """
     settings = list(settings if settings is not None else default_settings(scene))
@@ -367,15 +346,22 @@ def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int
     if budget is not None and not (isinstance(budget, (int, float)) and budget > 0 and math.isfinite(budget)):
         raise ValueError(f"budget={budget!r} must be a positive number of seconds (or None)")
     reference = scene.reference()
-    tasks = [(i, scene, s, reference, int(repeats), int(samples), budget) for i, s in enumerate(settings)]
-    done = {}
+    # The hard limit: a run still busy GRACE_SECONDS after its budget is killed (in a worker process;
+    # nothing can kill a run in this one).
+    limit = None if budget is None else budget + runner.GRACE_SECONDS
+    tasks = [runner.Task(run_setting, (scene, s, reference, int(repeats), int(samples), budget), limit)
+             for s in settings]
+    done: Dict[int, Run] = {}
     interrupted = False
     tick = time.perf_counter()
 
-    def record(index, row):
-        done[index] = row
+    def record(index: int, outcome: runner.Outcome) -> None:
+        run = runs.from_outcome(_identity(scene, settings[index]), outcome)
+        if not run.verdict:  # its process did not return it
+            run.verdict, run.verdict_detail = judge(scene, run)
+        done[index] = run
         if progress:
-            progress(len(done), len(tasks), row)
+            progress(len(done), len(tasks), run)
 
     if scheduler is None:
         workers = int(workers or os.cpu_count() or 1)
@@ -384,65 +370,15 @@ def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int
         workers, where = 0, "dask"  # known once connected
     try:
         if scheduler is not None:
-            workers, where = _run_dask(tasks, scheduler, record)
-        elif workers == 1:
-            for task in tasks:
-                record(*_task(task))
+            _, workers, where = runner.run_tasks_dask(tasks, scheduler, record)
         else:
-            _run_pool(tasks, workers, record)
+            runner.run_tasks(tasks, workers, processes=workers > 1, done=record)
+    except runner.WorkerStartError as error:
+        raise RuntimeError("workers: a worker process died before returning its run (a script that calls "
+                           "compare.run() needs an `if __name__ == '__main__':` guard, since workers import "
+                           "it; workers=1 runs in this process)") from error
     except KeyboardInterrupt:
         interrupted = True
     rows = [done[i] for i in sorted(done)]
     return Results(scene, settings, rows, reference, int(repeats), int(samples), workers, where,
                    time.perf_counter() - tick, interrupted, budget)
-
-
-def _run_pool(tasks, workers, record):
-    import multiprocessing
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-    from concurrent.futures.process import BrokenProcessPool
-
-    # spawn: workers start clean, without this process's ctypes callbacks. An
-    # executor, not multiprocessing.Pool: a worker that dies (a script without
-    # a __main__ guard, a crash in C) breaks it with an error; Pool would
-    # start replacements forever.
-    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"), initializer=_ignore_sigint)
-    try:
-        pending = {pool.submit(_task, task) for task in tasks}
-        while pending:
-            done, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for future in done:
-                record(*future.result())
-    except BrokenProcessPool as error:
-        raise RuntimeError("workers: a worker process died before returning its run (a script that calls "
-                           "compare.run() needs an `if __name__ == '__main__':` guard, since workers import "
-                           "it; or the run crashed; workers=1 runs in this process)") from error
-    except BaseException:  # Ctrl-C or a failure in the parent: stop the workers now
-        for process in list(getattr(pool, "_processes", {}).values()):
-            process.terminate()
-        raise
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
-
-
-def _run_dask(tasks, scheduler, record):
-    try:
-        from distributed import Client, as_completed
-    except ImportError:
-        raise ImportError("scheduler: sending runs to Dask needs the [dask] extra: "
-                          "pip install 'rebound_pfvi[dask]'") from None
-    client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
-    address = client.scheduler.address
-    try:
-        workers = len(client.scheduler_info()["workers"])
-        futures = [client.submit(_task, task, pure=False) for task in tasks]
-        try:
-            for future in as_completed(futures):
-                record(*future.result())
-        except KeyboardInterrupt:
-            client.cancel(futures)
-            raise
-    finally:
-        if client is not scheduler:
-            client.close()
-    return workers, f"dask {address}"

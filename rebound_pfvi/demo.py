@@ -10,6 +10,7 @@ benchmarks/ and docs/ do the comparisons.
 """
 import math
 import time
+from typing import Any, Callable, Dict, List, Tuple
 
 import rebound
 
@@ -20,7 +21,8 @@ from .scenes import kepler_relative, orbit_elements
 M_PLANET = 1e-3
 
 
-def kepler_pair(e):
+def kepler_pair(e: float) -> rebound.Simulation:
+    """Two bodies (m = 1 and M_PLANET) at a = 1 with eccentricity e, in the centre-of-mass frame."""
     sim = rebound.Simulation()
     sim.add(m=1.0)
     sim.add(m=M_PLANET, a=1.0, e=e)
@@ -28,13 +30,14 @@ def kepler_pair(e):
     return sim
 
 
-def exact_relative_position(sim0, t):
+def exact_relative_position(sim0: rebound.Simulation, t: float) -> Tuple[float, float, float]:
     """Relative position of body 1 about body 0 at time t, from the elements at t = 0."""
     d = kepler_relative(sim0.G, sim0.particles[0].m, sim0.particles[1].m, orbit_elements(sim0), t)
     return d.x, d.y, d.z
 
 
-def configure(sim, name, period, steps_per_orbit):
+def configure(sim: rebound.Simulation, name: str, period: float, steps_per_orbit: int) -> None:
+    """Sets the integrator `name` ("pfvi:<fitting>", "whfast", "ias15") as the demo runs it."""
     if name.startswith("pfvi"):
         # fixed steps of dt; the two-point scheme
         configure_integrator(sim, "pfvi", dt=period / steps_per_orbit, epsilon=0., stages=2,
@@ -45,7 +48,8 @@ def configure(sim, name, period, steps_per_orbit):
         configure_integrator(sim, "ias15")
 
 
-def run_case(e, name, orbits, steps_per_orbit):
+def run_case(e: float, name: str, orbits: float, steps_per_orbit: int) -> Dict[str, Any]:
+    """One integrator on one orbit: steps, relative energy error, position error, wall time."""
     sim = kepler_pair(e)
     start = sim.copy()
     period = sim.particles[1].P
@@ -62,7 +66,8 @@ def run_case(e, name, orbits, steps_per_orbit):
             "wall_s": wall}
 
 
-def run_demo(orbits=100, write=print):
+def run_demo(orbits: float = 100, write: Callable[[str], Any] = print) -> List[Dict[str, Any]]:
+    """Prints (through `write`) and returns the demo's table."""
     write(f"Two bodies (m = 1, {M_PLANET:g}), a = 1, centre-of-mass frame, {orbits} orbits.")
     write("pfvi uses fixed steps (steps per orbit in brackets); IAS15 is adaptive; WHFast takes 100 steps per orbit.")
     write(f"{'e':>5}  {'integrator':<22} {'steps':>9} {'rel. energy err':>16} {'position err':>13} {'wall [s]':>9}")

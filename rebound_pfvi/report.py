@@ -1,4 +1,7 @@
-"""Writing a sweep's results: JSON, CSV, a markdown page and a work-precision PNG."""
+"""Writing results: a sweep's JSON, CSV, markdown page and work-precision PNG, and the stability report.
+
+Both read :class:`rebound_pfvi.runs.Run` s; a run's row in the JSON and CSV
+files is its :meth:`~rebound_pfvi.runs.Run.to_dict`."""
 from __future__ import annotations
 
 import csv
@@ -11,7 +14,8 @@ from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Optional
 if TYPE_CHECKING:
     import pathlib
 
-    from .compare import Results, Row
+    from .compare import Results
+    from .runs import Run
     from .stability import Report as StabilityReport
 
 #: Position errors (AU) at which the summary names the fastest run of each line.
@@ -31,10 +35,10 @@ def fmt(value: Any, spec: str = ".2g") -> str:
     return format(value, spec)
 
 
-def _knob(row: Row) -> str:
-    if row["knob"] == "steps/period":
-        return f"{row['value']:g} steps/period"
-    return f"{row['knob']} {row['value']:.0e}"
+def _knob(row: Run) -> str:
+    if row.knob == "steps/period":
+        return f"{row.value:g} steps/period"
+    return f"{row.knob} {row.value:.0e}"
 
 
 def length_unit(results: Results) -> str:
@@ -42,51 +46,58 @@ def length_unit(results: Results) -> str:
     return "AU" if getattr(results.scene, "unit_names", True) is not None else "sim. length unit"
 
 
-def markdown_table(rows: Iterable[Row], length: str = "AU") -> str:
+def markdown_table(rows: Iterable[Run], length: str = "AU") -> str:
+    """Every run of a sweep as a markdown table, with its verdict, counts, times and errors."""
     lines = ["| integrator | setting | verdict | steps | force evals | wall [s] | max rel. energy err | "
              f"final rel. energy err | position err [{length}] | note |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        if r["status"] != "ok":
-            message = r.get("verdict_detail") or r["status"]
-            lines.append(f"| {r['line']} | {_knob(r)} | {r.get('verdict', '-')} | - | - | - | - | - | - | "
+        if r.status != "ok":
+            message = r.verdict_detail or r.status
+            lines.append(f"| {r.label} | {_knob(r)} | {r.verdict or '-'} | - | - | - | - | - | - | "
                          f"{message.replace('|', '/')} |")
             continue
         note = ""
-        if r.get("verdict") == "inaccurate":
-            note = r["verdict_detail"]
-        if r.get("warnings"):
+        if r.verdict == "inaccurate":
+            note = r.verdict_detail
+        if r.warnings:
             note += ("; " if note else "") + "REBOUND warned (below)"
-        if r["family"] == "pfvi":
-            note += ("; " if note else "") + (f"{r['attempts_per_step']:.1f} trials/step, "
-                                              f"{r['iterations_mean']:.1f} iterations")
-        lines.append(f"| {r['line']} | {_knob(r)} | {r.get('verdict', '-')} | {r['steps']} | "
-                     f"{r['force_evaluations']} | "
-                     f"{r['wall_s']:.3g} | {r['energy_error_max']:.2e} | {r['energy_error_final']:.2e} | "
-                     f"{r['position_error']:.2e} | {note} |")
+        if r.family == "pfvi" and r.pfvi is not None:
+            note += ("; " if note else "") + (f"{r.pfvi['attempts_per_step']:.1f} trials/step, "
+                                              f"{r.pfvi['iterations_mean']:.1f} iterations")
+        lines.append(f"| {r.label} | {_knob(r)} | {r.verdict or '-'} | {r.steps} | "
+                     f"{r.force_evaluations} | "
+                     f"{_number(r.wall_s):.3g} | {_number(r.energy_error_max):.2e} | "
+                     f"{_number(r.energy_error_final):.2e} | {_number(r.position_error):.2e} | {note} |")
     return "\n".join(lines)
 
 
-def fastest(rows: Iterable[Row], target: float) -> Dict[str, Row]:
+def _number(value: Optional[float]) -> float:
+    """A measurement a finished run has (its type says it may be missing: then nan)."""
+    return math.nan if value is None else value
+
+
+def fastest(rows: Iterable[Run], target: float) -> Dict[str, Run]:
     """For each line, the run with the least wall time whose position error is <= target."""
-    best: Dict[str, Row] = {}
+    best: Dict[str, Run] = {}
     for r in rows:
-        if r["status"] == "ok" and r["position_error"] <= target:
-            if r["line"] not in best or r["wall_s"] < best[r["line"]]["wall_s"]:
-                best[r["line"]] = r
+        if r.status == "ok" and _number(r.position_error) <= target:
+            if r.label not in best or _number(r.wall_s) < _number(best[r.label].wall_s):
+                best[r.label] = r
     return best
 
 
-def summary_table(rows: List[Row], floor: float = 0.0, length: str = "AU") -> str:
-    lines_in_order = list(dict.fromkeys(r["line"] for r in rows))
+def summary_table(rows: List[Run], floor: float = 0.0, length: str = "AU") -> str:
+    """The fastest run of each line that reaches each position error, as a markdown table."""
+    lines_in_order = list(dict.fromkeys(r.label for r in rows))
     targets = [t for t in TARGETS if t > floor]
     head = "| position error <= | " + " | ".join(lines_in_order) + " |"
     lines = [head, "|---|" + "---|" * len(lines_in_order)]
     for target in targets:
         best = fastest(rows, target)
-        cells = [f"{best[n]['wall_s']:.3g} s" if n in best else "-" for n in lines_in_order]
+        cells = [f"{_number(best[n].wall_s):.3g} s" if n in best else "-" for n in lines_in_order]
         if best:
-            winner = min(best, key=lambda n: best[n]["wall_s"])
+            winner = min(best, key=lambda n: _number(best[n].wall_s))
             cells = [f"**{c}**" if n == winner else c for n, c in zip(lines_in_order, cells)]
         lines.append(f"| {target:.0e} {length} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
@@ -109,7 +120,7 @@ HOW = {
 def whfast_caveat(results: Results) -> str:
     """A sentence on what WHFast's result means on this scene, or "" if nothing needs saying."""
     scene = results.scene
-    if not any(r["family"] == "whfast" for r in results.rows):
+    if not any(r.family == "whfast" for r in results.rows):
         return ""
     if scene.name == "kepler" or (scene.name == "custom" and scene.build().N == 2):
         return ("**WHFast caveat**: this is a pure two-body Kepler problem, which WHFast solves exactly "
@@ -128,8 +139,8 @@ def _times(ratio: float) -> str:
     return f"{ratio:.0f}x" if ratio >= 10 else f"{ratio:.1f}x"
 
 
-def _per_evaluation(row: Row) -> float:
-    return row["wall_s"] / row["force_evaluations"] * 1e6 if row.get("force_evaluations") else math.nan
+def _per_evaluation(row: Run) -> float:
+    return _number(row.wall_s) / row.force_evaluations * 1e6 if row.force_evaluations else math.nan
 
 
 def conclusions(results: Results, floor: float = 0.0, length: str = "AU") -> List[str]:
@@ -141,33 +152,35 @@ def conclusions(results: Results, floor: float = 0.0, length: str = "AU") -> Lis
         if not best:
             sentences.append(f"To {target:.0e} {length}: no run of the sweep gets there.")
             continue
-        order = sorted(best.values(), key=lambda r: r["wall_s"])
+        order = sorted(best.values(), key=lambda r: _number(r.wall_s))
         win = order[0]
-        text = f"To {target:.0e} {length}: {win['line']} ({_knob(win)}) is fastest, {win['wall_s']:.3g} s"
+        win_s = _number(win.wall_s)
+        text = f"To {target:.0e} {length}: {win.label} ({_knob(win)}) is fastest, {win_s:.3g} s"
         # The runner-up of another family; pfvi gets its own clause unless it wins.
-        other = next((r for r in order[1:] if r["family"] != win["family"]
-                      and (win["family"] == "pfvi" or r["family"] != "pfvi")), None)
+        other = next((r for r in order[1:] if r.family != win.family
+                      and (win.family == "pfvi" or r.family != "pfvi")), None)
         if other:
-            text += f", {_times(other['wall_s'] / win['wall_s'])} faster than {other['line']} ({_knob(other)})"
-        pfvi = next((r for r in order if r["family"] == "pfvi"), None)
-        if win["family"] != "pfvi":
+            text += f", {_times(_number(other.wall_s) / win_s)} faster than {other.label} ({_knob(other)})"
+        pfvi = next((r for r in order if r.family == "pfvi"), None)
+        if win.family != "pfvi":
             if pfvi is None:
                 text += "; no pfvi run of the sweep gets there"
             else:
-                text += (f"; the fastest pfvi, {pfvi['line']} ({_knob(pfvi)}), takes {pfvi['wall_s']:.3g} s "
-                         f"({_times(pfvi['wall_s'] / win['wall_s'])}): {win['line']} needs "
-                         f"{win['force_evaluations']} force evaluations at {_per_evaluation(win):.2g} µs each, "
-                         f"pfvi {pfvi['force_evaluations']} at {_per_evaluation(pfvi):.2g} µs")
+                pfvi_s = _number(pfvi.wall_s)
+                text += (f"; the fastest pfvi, {pfvi.label} ({_knob(pfvi)}), takes {pfvi_s:.3g} s "
+                         f"({_times(pfvi_s / win_s)}): {win.label} needs "
+                         f"{win.force_evaluations} force evaluations at {_per_evaluation(win):.2g} µs each, "
+                         f"pfvi {pfvi.force_evaluations} at {_per_evaluation(pfvi):.2g} µs")
         elif other:
-            text += (f": pfvi needs {win['force_evaluations']} force evaluations at {_per_evaluation(win):.2g} µs "
-                     f"each, {other['line']} {other['force_evaluations']} at {_per_evaluation(other):.2g} µs")
+            text += (f": pfvi needs {win.force_evaluations} force evaluations at {_per_evaluation(win):.2g} µs "
+                     f"each, {other.label} {other.force_evaluations} at {_per_evaluation(other):.2g} µs")
         sentences.append(text + ".")
     return sentences
 
 
 def conclusions_section(results: Results, floor: float = 0.0, length: str = "AU") -> str:
     """The page's answer in words: who is fastest at each accuracy, why, and the WHFast caveat."""
-    families = list(dict.fromkeys(r["family"] for r in results.rows))
+    families = list(dict.fromkeys(r.family for r in results.rows))
     parts = ["\n".join(f"- {s}" for s in conclusions(results, floor, length)),
              "Why (the wall time per force evaluation above is one evaluation plus the integrator's own work "
              "per evaluation):\n\n" + "\n".join(f"- {HOW[f]}." for f in families if f in HOW)]
@@ -177,14 +190,14 @@ def conclusions_section(results: Results, floor: float = 0.0, length: str = "AU"
     return "\n\n".join(parts)
 
 
-def warnings_section(rows: Iterable[Row]) -> str:
+def warnings_section(rows: Iterable[Run]) -> str:
     """REBOUND's warnings, each explained once, with the runs that raised it."""
     from .compare import explain_warning
 
     by_message: Dict[str, List[str]] = {}
     for r in rows:
-        for message in r.get("warnings", ()):
-            by_message.setdefault(message, []).append(f"{r['line']} {_knob(r)}")
+        for message in r.warnings:
+            by_message.setdefault(message, []).append(f"{r.label} {_knob(r)}")
     return "\n".join(f"- \"{m}\" ({', '.join(runs)}): {explain_warning(m)}." for m, runs in by_message.items())
 
 
@@ -211,17 +224,17 @@ def plot(results: Results, path: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rows = [r for r in results.rows if r["status"] == "ok"]
-    lines_in_order = list(dict.fromkeys(r["line"] for r in rows))
+    rows = [r for r in results.rows if r.status == "ok"]
+    lines_in_order = list(dict.fromkeys(r.label for r in rows))
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.8))
     styles = {"pfvi": "-", "ias15": "--", "whfast": ":", "leapfrog": "-.", "bs": (0, (5, 1, 1, 1))}
     markers = "osD^v<>ph*"
     floor = 1e-17  # exact zeros (WHFast's energy on two bodies) are drawn at the floor
     for k, name in enumerate(lines_in_order):
-        sel = sorted((r for r in rows if r["line"] == name), key=lambda r: r["wall_s"])
-        family = sel[0]["family"]
-        for ax, key in zip(axes, ("position_error", "energy_error_max")):
-            ax.loglog([r["wall_s"] for r in sel], [max(r[key], floor) for r in sel], linestyle=styles[family],
+        sel = sorted((r for r in rows if r.label == name), key=lambda r: _number(r.wall_s))
+        family = sel[0].family
+        for ax, errors in zip(axes, ([r.position_error for r in sel], [r.energy_error_max for r in sel])):
+            ax.loglog([r.wall_s for r in sel], [max(_number(e), floor) for e in errors], linestyle=styles[family],
                       marker=markers[k % len(markers)], label=name, mfc="none" if family != "pfvi" else None)
     axes[0].set_ylabel(f"position error at t_end [{length_unit(results)}]")
     axes[1].set_ylabel("largest relative energy error")
@@ -260,7 +273,8 @@ def write(results: Results, output: str, basename: Optional[str] = None,
         writer = csv.DictWriter(f, fieldnames=("scene", "family", "options") + COLUMNS, extrasaction="ignore")
         writer.writeheader()
         for r in results.rows:
-            writer.writerow({**r, "options": json.dumps(r["options"])})
+            row = r.to_dict()
+            writer.writerow({**row, "options": json.dumps(row["options"])})
     paths["csv"] = base + ".csv"
     png_note = ""
     try:
@@ -306,7 +320,7 @@ particle from its reference position at t_end (Kepler: of the relative position)
 ## Warnings
 
 {warnings_section(results.rows)}
-""" if any(r.get("warnings") for r in results.rows) else "")
+""" if any(r.warnings for r in results.rows) else "")
     with open(base + ".md", "w") as f:
         f.write(text)
     paths["md"] = base + ".md"
@@ -327,7 +341,8 @@ def results_dict(results: Results) -> Dict[str, Any]:
             "repeats": results.repeats, "samples": results.samples, "workers": results.workers,
             "scheduler": results.scheduler, "budget_s": results.budget, "settings": len(results.settings),
             "finished": results.finished,
-            "interrupted": results.interrupted, "sweep_wall_s": results.wall_s, "rows": results.rows}
+            "interrupted": results.interrupted, "sweep_wall_s": results.wall_s,
+            "rows": [r.to_dict() for r in results.rows]}
 
 
 def results_table(results: Results) -> Any:
@@ -336,17 +351,17 @@ def results_table(results: Results) -> Any:
     import astropy.units as u
     from astropy.table import QTable
 
-    ok = [r for r in results.rows if r["status"] == "ok"]
+    ok = [r for r in results.rows if r.status == "ok"]
     t = QTable()
-    t["line"] = [r["line"] for r in ok]
-    t["knob"] = [r["knob"] for r in ok]
-    t["value"] = [r["value"] for r in ok]
-    t["steps"] = [r["steps"] for r in ok]
-    t["force_evaluations"] = [r["force_evaluations"] for r in ok]
-    t["wall_time"] = [r["wall_s"] for r in ok] << u.s
-    t["energy_error_max"] = [r["energy_error_max"] for r in ok]
-    t["energy_error_final"] = [r["energy_error_final"] for r in ok]
-    errors = [r["position_error"] for r in ok]
+    t["line"] = [r.label for r in ok]
+    t["knob"] = [r.knob for r in ok]
+    t["value"] = [r.value for r in ok]
+    t["steps"] = [r.steps for r in ok]
+    t["force_evaluations"] = [r.force_evaluations for r in ok]
+    t["wall_time"] = [r.wall_s for r in ok] << u.s
+    t["energy_error_max"] = [r.energy_error_max for r in ok]
+    t["energy_error_final"] = [r.energy_error_final for r in ok]
+    errors = [r.position_error for r in ok]
     if getattr(results.scene, "unit_names", True) is None:  # a custom simulation in its own units
         t["position_error"] = errors
     else:
@@ -359,9 +374,9 @@ def results_table(results: Results) -> Any:
 
 def stability_verdict_counts(report: StabilityReport) -> Dict[str, Dict[str, int]]:
     """{integrator: {verdict: runs}} over every case of the report."""
-    from . import verdict
+    from .runs import count
 
-    return verdict.count(report.rows, "integrator")
+    return count(report.rows)
 
 
 def stability_markdown(report: StabilityReport, command: Optional[str] = None) -> str:
@@ -383,9 +398,9 @@ def stability_markdown(report: StabilityReport, command: Optional[str] = None) -
               "relative energy error at the end and the largest over 100 checkpoints (for the parabola, "
               "relative to |T0| + |V0|); largest position error against the reference at the time reached "
               "(AU; for two-body cases the relative vector); steps; wall time.", ""]
-    by_case: Dict[str, List[Row]] = {}
+    by_case: Dict[str, List[Run]] = {}
     for row in report.rows:
-        by_case.setdefault(row["case"], []).append(row)
+        by_case.setdefault(row.scene, []).append(row)
     for name, rows in by_case.items():
         case = cases()[name]
         ref = report.references.get(name, {})
@@ -400,10 +415,10 @@ def stability_markdown(report: StabilityReport, command: Optional[str] = None) -
         lines += ["| integrator | verdict | what happened | t reached | energy error (end / max) | position error "
                   "[AU] | steps | wall s |", "|---|---|---|---|---|---|---|---|"]
         for r in rows:
-            lines.append(f"| {r['integrator']} | {r.get('verdict', '-')} | {r['what_happened'].replace('|', '/')} | "
-                         f"{fmt(r['fraction'], '.3g')} | {fmt(r['energy_error'])} / "
-                         f"{fmt(r['energy_error_max'])} | {fmt(r['position_error'])} | {fmt(r['steps'], 'd')} | "
-                         f"{fmt(r['wall_s'], '.3g')} |")
+            lines.append(f"| {r.label} | {r.verdict or '-'} | {r.what_happened.replace('|', '/')} | "
+                         f"{fmt(r.fraction, '.3g')} | {fmt(r.energy_error_final)} / "
+                         f"{fmt(r.energy_error_max)} | {fmt(r.position_error)} | {fmt(r.steps, 'd')} | "
+                         f"{fmt(r.wall_s, '.3g')} |")
         lines.append("")
     return "\n".join(lines)
 
@@ -416,9 +431,7 @@ def write_stability(report: StabilityReport, directory: Any, command: Optional[s
     directory = pathlib.Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     paths = [directory / "stability.json", directory / "stability.md"]
-    rows = [{k: v for k, v in r.items() if k != "positions"} for r in report.rows]
-    data = report.to_dict()
-    data["rows"] = rows
+    data = report.to_dict()  # its rows without the positions, which only the verdict needed
     data["command"] = command
     paths[0].write_text(json.dumps(data, indent=1, default=str))
     paths[1].write_text(stability_markdown(report, command))

@@ -3,14 +3,16 @@
 ``rebound-pfvi stability`` runs every case of :data:`CASES` with pfvi (every
 fitting, s = 2 and 4, adaptive steps unless the case prescribes fixed ones)
 beside IAS15 and WHFast. Every run is a separate process with a wall-time
-budget, so that a run which crashes, hangs or crawls becomes a row of the
-report ("crashed", "killed", "stopped by the budget") instead of taking the
-report down with it. Each row gives: the verdict (accurate, inaccurate,
-refused, crashed, over budget; :mod:`rebound_pfvi.verdict`, judged against
-the case's tolerance) with its detail, the time reached, the relative energy error (final
-and largest over 100 checkpoints), the position error against a reference at
-the time reached, steps, wall time, and what the integrator reported (u
-limited, steps rejected, asymmetric reversible steps).
+budget (:mod:`rebound_pfvi.runner`, ``fresh=True``), so that a run which
+crashes, hangs or crawls becomes a row of the report ("crashed", "killed",
+"stopped by the budget") instead of taking the report down with it. Every row
+is a :class:`rebound_pfvi.runs.Run`, and gives: the verdict (accurate,
+inaccurate, refused, crashed, over budget; :mod:`rebound_pfvi.verdict`,
+judged against the case's tolerance) with its detail, the time reached, the
+relative energy error (final and largest over 100 checkpoints), the position
+error against a reference at the time reached, steps, wall time, and what
+the integrator reported (u limited, steps rejected, asymmetric reversible
+steps).
 
 Units are AU, yr and Msun (G from REBOUND) unless a case says otherwise.
 References: the exact two-body solution where there is one (REBOUND's
@@ -21,34 +23,25 @@ infall); otherwise IAS15 at epsilon 1e-11, with its distance to a run at
 from __future__ import annotations
 
 import math
-import multiprocessing
 import threading
 import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
-from . import scenes, verdict
+from . import runner, runs, scenes, verdict
 from .integrators import configure as configure_integrator
+from .runs import ProgressCallback, Run
 
 if TYPE_CHECKING:
-    import pathlib
-
     import rebound
 
-#: A row of the report: one run of one config on one case.
-Row = Dict[str, Any]
-#: A job of :func:`run_isolated`: a module-level function and its arguments.
-Job = Tuple[Callable[..., Any], Tuple[Any, ...]]
-#: What became of a job: ("ok", result) | ("error", message) | ("crashed", exit code) | ("killed", seconds).
-Outcome = Tuple[str, Any]
 Vector = Tuple[float, float, float]
 
 FITTINGS = ("phase", "phase-literal", "none")
 STAGES = (2, 4)
 CHECKPOINTS = 100
-#: A run still busy this long after its budget is killed (the step under
-#: way when the budget runs out is finished first).
-GRACE_SECONDS = 60.0
+#: A run still busy this long after its budget is killed (see rebound_pfvi.runner).
+GRACE_SECONDS = runner.GRACE_SECONDS
 
 
 @dataclass
@@ -418,11 +411,17 @@ def _positions(sim):
     return [(p.x, p.y, p.z) for p in sim.particles]
 
 
-def run(case_name: str, config: Config, budget: float) -> Row:
-    """One run of `config` on a case, within `budget` seconds of integration."""
+def _identity(case_name: str, config: Config, budget: float) -> Run:
+    """A run of `config` on a case before it has run (no finite state yet)."""
+    return Run(runs.STABILITY, case_name, config.family, config.label, budget_s=budget, finite=False,
+               options={"fitting": config.fitting, "stages": config.stages, "epsilon": config.epsilon})
+
+
+def run(case_name: str, config: Config, budget: float) -> Run:
+    """One run of `config` on a case, within `budget` seconds of integration (not yet judged)."""
     case = cases()[case_name]
-    row = {"case": case_name, "integrator": config.label, "family": config.family, "fitting": config.fitting,
-           "stages": config.stages, "epsilon": config.epsilon, "status": "finished", "budget_s": budget}
+    row = _identity(case_name, config, budget)
+    row.status = "finished"
     sim = case.build()
     configure(sim, case, config)
     E0 = sim.energy()
@@ -447,24 +446,22 @@ def run(case_name: str, config: Config, budget: float) -> Row:
             sim.integrate(case.t_end * k / CHECKPOINTS, exact_finish_time=1 if last else 0)
             worst = max(worst, abs(sim.energy() - E0) / scale)
             if out_of_time.is_set():
-                row["status"] = f"stopped by the budget of {budget:g} s"
+                row.status = f"stopped by the budget of {budget:g} s"
                 break
     except RuntimeError as error:  # pfvi refuses a step (state unchanged) or REBOUND stops
-        row["status"] = f"refused: {error}"
+        row.status = f"refused: {error}"
     except Exception as error:  # noqa: BLE001 - any other failure is a result of the run, kept with its type
-        row["status"] = f"error: {type(error).__name__}: {error}"
+        row.status = f"error: {type(error).__name__}: {error}"
     finally:
         timer.cancel()
     wall = time.perf_counter() - tick
     E = sim.energy()
-    row.update(t=float(sim.t), fraction=float(sim.t) / case.t_end, wall_s=wall, steps=int(sim.steps_done),
-               energy_error=abs(E - E0) / scale, energy_error_max=max(worst, abs(E - E0) / scale),
-               positions=_positions(sim), finite=all(math.isfinite(x) for p in _positions(sim) for x in p))
+    row.t, row.fraction, row.wall_s, row.steps = float(sim.t), float(sim.t) / case.t_end, wall, int(sim.steps_done)
+    row.energy_error_final, row.energy_error_max = abs(E - E0) / scale, max(worst, abs(E - E0) / scale)
+    row.positions = _positions(sim)
+    row.finite = all(math.isfinite(x) for p in row.positions for x in p)
     if config.family == "pfvi":
-        ri = sim.integrator
-        row.update(n_steps=int(ri.n_steps), n_attempts=int(ri.n_attempts), n_rejected=int(ri.n_rejected),
-                   n_asymmetric=int(ri.n_asymmetric), n_u_limited=int(ri.n_u_limited),
-                   iterations_max=int(ri.iterations_max))
+        row.pfvi = runs.pfvi_counts(sim)
     return row
 
 
@@ -482,165 +479,78 @@ def reference_positions(case_name: str, t: float, epsilon: float = scenes.REFERE
     return _positions(sim)
 
 
-def position_error(case: Case, row: Row, reference: Any) -> float:
-    positions = row["positions"]
+def position_error(case: Case, row: Run, reference: Any) -> float:
+    """The largest distance from the reference at the time reached (two-body cases: of the relative vector)."""
+    positions = row.positions
+    assert positions is not None, "a run without a state has no position error"
     if case.reference_kind in ("kepler", "radial"):
         d = [positions[1][k] - positions[0][k] for k in range(3)]
         return math.dist(d, reference)
     return max(math.dist(p, q) for p, q in zip(positions, reference))
 
 
-def relative_position_error(case: Case, row: Row, reference: Any) -> float:
+def relative_position_error(case: Case, row: Run, reference: Any) -> float:
     """The position error the verdict is judged by: relative to each body's
     reference distance from particle 0 (see :mod:`rebound_pfvi.verdict`)."""
-    positions = row["positions"]
+    positions = row.positions
+    assert positions is not None, "a run without a state has no position error"
     if case.reference_kind in ("kepler", "radial"):
         d = [positions[1][k] - positions[0][k] for k in range(3)]
         return verdict.relative_vector_error(d, reference)
     return verdict.relative_position_error(positions, reference)
 
 
-def judge(case: Case, row: Row) -> Tuple[str, str]:
-    """(verdict, detail) of a row: see :mod:`rebound_pfvi.verdict`."""
-    status = row["status"]
-    if status == "finished":
-        return verdict.judge(row["energy_error_max"], row.get("relative_position_error"), case.tolerance,
-                             finite=row["finite"])
-    if status.startswith("stopped by the budget") or status.startswith("killed"):
-        detail = status
-        if row.get("fraction") is not None:
-            detail += f", at {row['fraction']:.3g} of the run"
-            if row.get("finite") and row.get("relative_position_error") is not None:
-                detail += (f" (so far: energy error {row['energy_error_max']:.2g}, position error "
-                           f"{row['relative_position_error']:.2g} of the distance)")
-        return verdict.OVER_BUDGET, detail
-    if status.startswith("refused: "):
-        return verdict.REFUSED, status[len("refused: "):]
-    return verdict.CRASHED, status
+def judge(case: Case, row: Run) -> Tuple[str, str]:
+    """(verdict, detail) of a run (:func:`rebound_pfvi.runs.judge`) against the case's tolerance."""
+    return runs.judge(row, case.tolerance)
 
 
 # --- running many, each in its own process -------------------------------------
 
-def _reference_pair(case_name, t):
+def _reference_pair(case_name: str, t: float) -> Dict[str, Any]:
     """The IAS15 reference at t, and the looser run its uncertainty is taken from."""
     return {"best": reference_positions(case_name, t),
             "check": reference_positions(case_name, t, scenes.REFERENCE_CHECK_EPSILON)}
 
 
-def _child(conn, job):
-    function, args = job
-    try:
-        conn.send(("ok", function(*args)))
-    except BaseException as error:  # noqa: BLE001 - reported to the parent, which records it
-        conn.send(("error", f"{type(error).__name__}: {error}"))
-    finally:
-        conn.close()
-
-
-@dataclass
-class _Slot:
-    process: Any  # multiprocessing's process and connection
-    conn: Any
-    job: Job
-    index: int
-    deadline: float
-
-
-def run_isolated(jobs: Sequence[Job], workers: int = 2, hard_limits: Optional[Sequence[float]] = None,
-                 progress: Optional[Callable[[int, Outcome], None]] = None) -> List[Outcome]:
-    """Runs each job, a (module-level function, args) pair, in a fresh process,
-    at most `workers` at once.
-
-    Returns a list of ("ok", result) | ("error", message) | ("crashed", exit
-    code) | ("killed", seconds), one per job, in order. A job is killed once
-    its hard limit (seconds) has passed.
-    """
-    ctx = multiprocessing.get_context("spawn")
-    results: List[Outcome] = [("error", "not run")] * len(jobs)  # each replaced when its job ends
-    pending = list(range(len(jobs)))
-    running: List[_Slot] = []
-    try:
-        while pending or running:
-            while pending and len(running) < max(1, workers):
-                i = pending.pop(0)
-                parent, child = ctx.Pipe(duplex=False)
-                process = ctx.Process(target=_child, args=(child, jobs[i]), daemon=True)
-                process.start()
-                child.close()
-                limit = hard_limits[i] if hard_limits else None
-                running.append(_Slot(process, parent, jobs[i], i,
-                                     time.monotonic() + limit if limit else math.inf))
-            for slot in list(running):
-                outcome = None
-                if slot.conn.poll(0.02):
-                    try:
-                        outcome = slot.conn.recv()
-                    except EOFError:
-                        slot.process.join()
-                        outcome = ("crashed", slot.process.exitcode)
-                elif not slot.process.is_alive():
-                    slot.process.join()
-                    outcome = ("crashed", slot.process.exitcode)
-                elif time.monotonic() > slot.deadline:
-                    slot.process.kill()
-                    outcome = ("killed", hard_limits[slot.index] if hard_limits else math.inf)
-                if outcome is not None:
-                    slot.process.join()
-                    slot.conn.close()
-                    running.remove(slot)
-                    results[slot.index] = outcome
-                    if progress:
-                        progress(slot.index, outcome)
-    finally:
-        for slot in running:
-            slot.process.kill()
-            slot.process.join()
-    return results
-
-
 @dataclass
 class Report:
-    rows: List[Row]
+    """The runs of every case with every config, and the references they were judged against."""
+
+    rows: List[Run]
     references: Dict[str, Any] = field(default_factory=dict)
     budget: float = 0.0
     wall_s: float = 0.0
 
     def to_dict(self) -> Dict[str, Any]:
-        return {"budget_s": self.budget, "wall_s": self.wall_s, "rows": self.rows,
+        """The report as JSON-ready data (stability.json, without the command)."""
+        return {"budget_s": self.budget, "wall_s": self.wall_s, "rows": [r.to_dict() for r in self.rows],
                 "references": self.references,
                 "cases": {name: {"title": c.title, "t_end": c.t_end, "reference": c.reference_kind,
                                  "fixed_dt": c.fixed_dt, "whfast_dt": c.whfast_step, "note": c.note}
                           for name, c in cases().items() if name in self.references}}
 
 
-def what_happened(row: Row) -> str:
+def what_happened(row: Run) -> str:
     """The verdict with its detail (else the status), and what pfvi counted on the way."""
-    parts = [row["verdict_detail"] if row.get("verdict_detail") else row["status"]]
-    if row.get("family") == "pfvi" and "n_steps" in row:
-        if row["n_u_limited"]:
-            parts.append(f"u limited in {row['n_u_limited']} particle-steps")
-        if row["n_rejected"]:
-            parts.append(f"{row['n_rejected']} trial steps rejected")
-        if row["n_asymmetric"]:
-            parts.append(f"{row['n_asymmetric']} reversible steps not solved (asymmetric)")
-    if row["status"] == "finished" and not row["finite"]:
+    parts = [row.verdict_detail if row.verdict_detail else row.status]
+    if row.family == "pfvi" and row.pfvi is not None:
+        if row.pfvi["n_u_limited"]:
+            parts.append(f"u limited in {row.pfvi['n_u_limited']} particle-steps")
+        if row.pfvi["n_rejected"]:
+            parts.append(f"{row.pfvi['n_rejected']} trial steps rejected")
+        if row.pfvi["n_asymmetric"]:
+            parts.append(f"{row.pfvi['n_asymmetric']} reversible steps not solved (asymmetric)")
+    if row.status == "finished" and not row.finite:
         parts.append("NON-FINITE STATE")
     return "; ".join(parts)
 
 
-def _failed_status(outcome):
-    kind, detail = outcome
-    if kind == "crashed":
-        return f"crashed: process exit code {detail}"
-    if kind == "killed":
-        return f"killed: no result {detail:g} s after the start"
-    return f"error: {detail}"
-
-
 def run_all(case_names: Optional[Sequence[str]] = None, configs: Optional[Sequence[Config]] = None,
-            budget: float = 60.0, workers: int = 2,
-            progress: Optional[Callable[[int, Outcome], None]] = None) -> Report:
-    """Every case x every config, each run isolated; references first."""
+            budget: float = 60.0, workers: int = 2, progress: Optional[ProgressCallback] = None) -> Report:
+    """Every case x every config, each run in a process of its own (rebound_pfvi.runner);
+    references first. progress(done, total, run) is called as each run ends (before it is judged:
+    the runs are judged once all have ended)."""
     table = cases()
     names = list(case_names) if case_names else list(table)
     for name in names:
@@ -649,8 +559,9 @@ def run_all(case_names: Optional[Sequence[str]] = None, configs: Optional[Sequen
     configs = configs or default_configs()
     tick = time.perf_counter()
     references = {}
-    ref_jobs = [(_reference_pair, (n, table[n].t_end)) for n in names if table[n].reference_kind == "ias15"]
-    for (_, (name, _t)), outcome in zip(ref_jobs, run_isolated(ref_jobs, workers)):
+    integrated = [n for n in names if table[n].reference_kind == "ias15"]
+    ref_tasks = [runner.Task(_reference_pair, (n, table[n].t_end)) for n in integrated]
+    for name, outcome in zip(integrated, runner.run_tasks(ref_tasks, workers, fresh=True)):
         if outcome[0] != "ok":
             raise RuntimeError(f"the IAS15 reference of case {name} failed: {outcome}")
         best, check = outcome[1]["best"], outcome[1]["check"]
@@ -661,32 +572,33 @@ def run_all(case_names: Optional[Sequence[str]] = None, configs: Optional[Sequen
         if table[name].reference_kind != "ias15":
             references[name] = {"uncertainty": 0.0, "how": "exact" if table[name].reference_kind == "kepler"
                                 else "exact (radial Kepler equation)"}
-    jobs = [(run, (n, c, budget)) for n in names for c in configs]
-    outcomes = run_isolated(jobs, workers, hard_limits=[budget + GRACE_SECONDS] * len(jobs), progress=progress)
+    pairs = [(n, c) for n in names for c in configs]
+    tasks = [runner.Task(run, (n, c, budget), budget + GRACE_SECONDS) for n, c in pairs]
+    ended = 0
+
+    def record(index: int, outcome: runner.Outcome) -> None:
+        nonlocal ended
+        ended += 1
+        if progress:
+            progress(ended, len(tasks), runs.from_outcome(_identity(*pairs[index], budget), outcome))
+
+    outcomes = runner.run_tasks(tasks, workers, fresh=True, done=record)
     rows = []
-    for (_, (name, config, _b)), outcome in zip(jobs, outcomes):
+    for (name, config), outcome in zip(pairs, outcomes):
         case = table[name]
-        if outcome[0] == "ok":
-            row = outcome[1]
-        else:
-            row = {"case": name, "integrator": config.label, "family": config.family, "fitting": config.fitting,
-                   "stages": config.stages, "epsilon": config.epsilon, "t": None, "fraction": None,
-                   "wall_s": None, "steps": None, "energy_error": None, "energy_error_max": None,
-                   "positions": None, "finite": False,
-                   "status": _failed_status(outcome)}
-        if row.get("positions") is not None and row["finite"]:
-            if case.reference_kind == "ias15" and row["t"] != case.t_end:
-                reference = reference_positions(name, row["t"])
+        row = runs.from_outcome(_identity(name, config, budget), outcome)
+        if row.positions is not None and row.finite:
+            assert row.t is not None
+            if case.reference_kind == "ias15" and row.t != case.t_end:
+                reference = reference_positions(name, row.t)
             elif case.reference_kind == "ias15":
                 reference = references[name]["positions"]
             else:
                 assert case.exact is not None, f"case {name}: an exact reference needs exact(t)"
-                reference = case.exact(row["t"])
-            row["position_error"] = position_error(case, row, reference)
-            row["relative_position_error"] = relative_position_error(case, row, reference)
-        else:
-            row["position_error"] = row["relative_position_error"] = None
-        row["verdict"], row["verdict_detail"] = judge(case, row)
-        row["what_happened"] = what_happened(row)
+                reference = case.exact(row.t)
+            row.position_error = position_error(case, row, reference)
+            row.relative_position_error = relative_position_error(case, row, reference)
+        row.verdict, row.verdict_detail = judge(case, row)
+        row.what_happened = what_happened(row)
         rows.append(row)
     return Report(rows, references, budget, time.perf_counter() - tick)

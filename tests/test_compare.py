@@ -8,6 +8,7 @@ import pytest
 
 from rebound_pfvi import compare, report, scenes
 from rebound_pfvi.__main__ import main
+from rebound_pfvi.runs import Run
 
 pytestmark = pytest.mark.slow  # runners, CLI and pages: skipped by `pytest -m "not slow"`
 
@@ -68,7 +69,7 @@ def test_counting_callback_leaves_the_run_bit_identical(family, value):
 
 
 def _without_timing(rows):
-    return [{k: v for k, v in r.items() if k not in ("wall_s", "walls_s")} for r in rows]
+    return [{k: v for k, v in r.to_dict().items() if k not in ("wall_s", "walls_s")} for r in rows]
 
 
 SMALL_SWEEP = [compare.Setting("pfvi", 1e-6), compare.Setting("pfvi", 1e-5, (("stages", 2), ("fitting", "none"))),
@@ -150,7 +151,7 @@ def test_main_job_is_the_comet_and_its_page_says_who_is_fastest_and_why(tmp_path
     data = json.loads((out / "comet-e0.95.json").read_text())
     assert "## Who is fastest at each accuracy, and why" in page and "WHFast is not exact here" in page
     assert "WHFast caveat" not in page
-    best = report.fastest(data["rows"], 1e-2)
+    best = report.fastest([Run.from_dict(r) for r in data["rows"]], 1e-2)
     winner = min(best.values(), key=lambda r: r["wall_s"])
     # The sentence names the measured winner, its time and its force evaluations.
     sentence = next(line for line in page.splitlines() if line.startswith("- To 1e-02 AU: "))

@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from rebound_pfvi import stability
+from rebound_pfvi import runner, stability
 
 pytestmark = pytest.mark.slow  # runners, CLI and pages: skipped by `pytest -m "not slow"`
 
@@ -76,10 +76,12 @@ def test_fixed_step_cases_give_pfvi_fixed_steps():
     assert sim.integrator.epsilon == 0.0 and sim.dt == case.fixed_dt
 
 
-def test_isolated_runner_reports_results_crashes_and_hangs():
+def test_isolated_runner_reports_results_crashes_and_hangs(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # a core file of the aborted run, if the system writes one, lands here
     jobs = [(math.sqrt, (4.0,)), (os.abort, ()), (time.sleep, (60.0,)), (math.sqrt, (-1.0,))]
     tick = time.monotonic()
-    outcomes = stability.run_isolated(jobs, workers=2, hard_limits=[30.0, 30.0, 2.0, 30.0])
+    outcomes = runner.run_tasks([runner.Task(f, args, limit) for (f, args), limit in
+                                 zip(jobs, [30.0, 30.0, 2.0, 30.0])], workers=2, fresh=True)
     assert outcomes[0] == ("ok", 2.0)
     assert outcomes[1][0] == "crashed" and outcomes[1][1] != 0
     assert outcomes[2] == ("killed", 2.0)

@@ -5,6 +5,7 @@ import math
 import pytest
 
 from rebound_pfvi import compare, scenes, stability, verdict
+from rebound_pfvi.runs import COMPARE, STABILITY, Run
 
 pytestmark = pytest.mark.slow  # runners, CLI and pages: skipped by `pytest -m "not slow"`
 
@@ -42,22 +43,26 @@ def test_relative_position_error_is_per_body_about_body_0():
 def test_stability_statuses_map_to_verdicts():
     case = stability.cases()["kepler-e0.99"]
     base = {"energy_error_max": 1e-7, "relative_position_error": 1e-6, "finite": True, "fraction": 0.25}
-    assert stability.judge(case, {**base, "status": "finished"})[0] == verdict.ACCURATE
-    assert stability.judge(case, {**base, "status": "finished", "energy_error_max": 4.2e5}) == (
+
+    def row(**fields):
+        return Run(STABILITY, "kepler-e0.99", "pfvi", "pfvi phase s=4", **{**base, **fields})
+
+    assert stability.judge(case, row(status="finished"))[0] == verdict.ACCURATE
+    assert stability.judge(case, row(status="finished", energy_error_max=4.2e5)) == (
         verdict.INACCURATE, "energy error 4.2e+05 > 0.01, position error 1e-06 of the distance")
-    kind, detail = stability.judge(case, {**base, "status": "stopped by the budget of 60 s"})
+    kind, detail = stability.judge(case, row(status="stopped by the budget of 60 s"))
     assert kind == verdict.OVER_BUDGET and "at 0.25 of the run" in detail and "energy error 1e-07" in detail
     message = "pfvi: the reversible step equation from t = 2.76 did not converge (a long message, kept whole)"
-    assert stability.judge(case, {**base, "status": "refused: " + message}) == (verdict.REFUSED, message)
-    assert stability.judge(case, {**base, "status": "crashed: process exit code -6", "fraction": None})[0] == \
+    assert stability.judge(case, row(status="refused: " + message)) == (verdict.REFUSED, message)
+    assert stability.judge(case, row(status="crashed: process exit code -6", fraction=None))[0] == \
         verdict.CRASHED
-    assert stability.judge(case, {**base, "status": "killed: no result 120 s after the start",
-                                  "fraction": None})[0] == verdict.OVER_BUDGET
-    assert stability.judge(case, {**base, "status": "error: ValueError: bad"})[0] == verdict.CRASHED
+    assert stability.judge(case, row(status="killed: no result 120 s after the start",
+                                     fraction=None))[0] == verdict.OVER_BUDGET
+    assert stability.judge(case, row(status="error: ValueError: bad"))[0] == verdict.CRASHED
     # The round-off case holds runs to round-off, not to a percent.
     tiny = stability.cases()["fixed-1e-12"]
     assert tiny.tolerance.position == 1e-12
-    assert stability.judge(tiny, {**base, "status": "finished"})[0] == verdict.INACCURATE
+    assert stability.judge(tiny, row(status="finished"))[0] == verdict.INACCURATE
 
 
 def test_radial_infall_at_s2_is_inaccurate_and_ias15_accurate():
@@ -68,8 +73,8 @@ def test_radial_infall_at_s2_is_inaccurate_and_ias15_accurate():
     rows = {}
     for config in (stability.Config("pfvi", "phase", 2, 1e-6), stability.Config("ias15", epsilon=1e-9)):
         row = stability.run(name, config, budget)
-        row["relative_position_error"] = stability.relative_position_error(case, row, case.exact(row["t"]))
-        row["verdict"], row["verdict_detail"] = stability.judge(case, row)
+        row.relative_position_error = stability.relative_position_error(case, row, case.exact(row["t"]))
+        row.verdict, row.verdict_detail = stability.judge(case, row)
         rows[config.family] = row
     assert rows["pfvi"]["status"] == "finished" and rows["pfvi"]["energy_error_max"] > 1.0
     assert rows["pfvi"]["verdict"] == verdict.INACCURATE
@@ -100,7 +105,7 @@ def test_compare_rows_carry_verdicts():
     ("diverged (non-finite energy or position)", (verdict.INACCURATE, "diverged (non-finite energy or position)")),
 ])
 def test_compare_failures_map_to_verdicts(status, expected):
-    assert compare.judge(scenes.Kepler(), {"status": status}) == expected
+    assert compare.judge(scenes.Kepler(), Run(COMPARE, "kepler", "pfvi", "pfvi s=4 phase", status=status)) == expected
 
 
 def test_compare_budget_stops_a_slow_run_as_over_budget(tmp_path):
