@@ -155,7 +155,7 @@ def stage_coefficients(s: int, u: float) -> Dict[str, Any]:
     return result
 
 
-def stage_differentiation(s, u, fitting="exact"):
+def stage_differentiation(s: int, u: float, fitting: str = "exact") -> Any:
     """The differentiation matrix ``a[k, j]`` (the slope of correction function j
     at node k) that the s-stage step of ``fitting`` uses at u = omega h.
 

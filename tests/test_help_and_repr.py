@@ -11,7 +11,7 @@ import rebound
 
 import rebound_pfvi
 
-OPTIONS = ("fitting", "frequency", "omega", "stages", "u_max", "epsilon", "step_control")
+OPTIONS = ("fitting", "frequency", "centre", "omega", "stages", "u_max", "epsilon", "step_control")
 
 
 def pfvi():

@@ -82,7 +82,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "Fitting of the discrete Lagrangian. 'none' (default): the classical trapezoidal Ld of "
       "Marsden & West (velocity Verlet), and for stages >= 3 the classical Lobatto Ld; under the "
       "adaptive step control (the default) fitting changes neither the steps nor the error and "
-      "costs time (docs/method.md), so it is off. 'phase': K&V's phase-fitted "
+      "costs time (measured: the docs of rebound_pfvi's source), so it is off. 'phase': K&V's phase-fitted "
       "Ld divided by gamma(u) = u cot u, which makes positions and momenta exact on the "
       "harmonic oscillator with two nodes, but not for stages >= 3 (the interior corrections, "
       "polynomial, move the stage points off the oscillator's path). 'exact': 'phase' with each "
@@ -91,7 +91,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "every s, of order 2s - 2, and the same as 'phase' at s = 2. 'phase-literal': Ld exactly as "
       "printed by K&V; positions are exact on the oscillator (two nodes) but momenta come out "
       "scaled by gamma(u). With fixed steps 'exact' with the default frequency and centre is the "
-      "most accurate (docs/results/fitting.md). The seed's schemes as printed are 'phase' and "
+      "most accurate (same docs, 'What fitting buys'). The seed's schemes as printed are 'phase' and "
       "'phase-literal' with centre = 'origin' and frequency = 'curvature'. "
       "Type: text (REBOUND lists its storage type). Default 'none'.",
       REB_INT, "fitting", offsetof(struct pfvi_state, options.fitting), 0, 0, pfvi_fitting_enum },
@@ -101,7 +101,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "'radial' (default): sqrt(-a.d)/|d|, so that the harmonic part -omega^2 d carries the whole "
       "pull towards the centre at the step's start (about a partner, G (m + m_partner)/r^3: its "
       "whole attraction); 0 if a points away from it. With fixed steps it drifts in energy at high e "
-      "(docs/method.md). 'curvature' (K&V, 'Frequency Evaluation and Error Control'): "
+      "(same docs). 'curvature' (K&V, 'Frequency Evaluation and Error Control'): "
       "|w x a|/|w|^2, the angular rate on the osculating circle; 0 on a straight line or at rest. "
       "'mean-motion': the mean motion "
       "sqrt(mu/A^3) of the osculating two-body orbit about the particle's partner (the body of "
