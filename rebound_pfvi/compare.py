@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from . import runner, runs, verdict
-from .integrators import FAMILIES
+from .integrators import FAMILIES, SEED_MODEL
 from .integrators import configure as configure_integrator
 from .runs import ProgressCallback, Run
 
@@ -129,7 +129,7 @@ def configure(sim: rebound.Simulation, scene: Scene, setting: Setting) -> None:
     if setting.family == "pfvi":
         # dt: the cap on adaptive steps; the controller starts from it.
         configure_integrator(sim, "pfvi", dt=scene.period / 10.0, stages=int(opts.get("stages", 4)),
-                             fitting=opts.get("fitting", "phase"),
+                             fitting=opts.get("fitting", "phase"), centre=opts.get("centre", SEED_MODEL["centre"]),
                              step_control=opts.get("step_control", "reversible"), epsilon=setting.value)
         scene.configure_pfvi(sim, opts.get("frequency", "curvature"))
     elif setting.family == "ias15":

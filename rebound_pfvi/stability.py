@@ -1,7 +1,8 @@
 """Stiff and extreme cases: does each integrator finish, how wrong is it, and what happened?
 
 ``rebound-pfvi stability`` runs every case of :data:`CASES` with pfvi (every
-fitting, s = 2 and 4, adaptive steps unless the case prescribes fixed ones)
+fitting of the seed, with its frequency and centre (``SEED_MODEL``), and
+"none"; s = 2 and 4, adaptive steps unless the case prescribes fixed ones)
 beside IAS15 and WHFast. Every run is a separate process with a wall-time
 budget (:mod:`rebound_pfvi.runner`, ``fresh=True``), so that a run which
 crashes, hangs or crawls becomes a row of the report ("crashed", "killed",
@@ -29,7 +30,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from . import runner, runs, scenes, verdict
-from .integrators import configure as configure_integrator
+from .integrators import SEED_MODEL, configure as configure_integrator
 from .runs import ProgressCallback, Run
 
 if TYPE_CHECKING:
@@ -381,7 +382,8 @@ def configure(sim: rebound.Simulation, case: Case, config: Config) -> None:
         fixed = case.fixed_dt is not None
         # dt: the fixed step, or the cap on adaptive steps
         configure_integrator(sim, "pfvi", dt=case.fixed_dt if fixed else case.time_scale / 10.0,
-                             fitting=config.fitting, stages=config.stages, epsilon=0.0 if fixed else config.epsilon)
+                             fitting=config.fitting, stages=config.stages, epsilon=0.0 if fixed else config.epsilon,
+                             **SEED_MODEL)
     elif config.family == "ias15":
         configure_integrator(sim, "ias15", dt=case.fixed_dt if case.fixed_dt is not None else case.time_scale / 100.0,
                              epsilon=config.epsilon)

@@ -90,24 +90,25 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "stationarity equations hold on the oscillator's exact path: exact on the oscillator at "
       "every s, of order 2s - 2, and the same as 'phase' at s = 2. 'phase-literal': Ld exactly as "
       "printed by K&V; positions are exact on the oscillator (two nodes) but momenta come out "
-      "scaled by gamma(u). With fixed steps 'exact' with the default frequency and centre is the "
-      "most accurate (same docs, 'What fitting buys'). The seed's schemes as printed are 'phase' and "
+      "scaled by gamma(u). With fixed steps 'exact' about partners pays "
+      "(same docs, 'What fitting buys'). The seed's schemes as printed are 'phase' and "
       "'phase-literal' with centre = 'origin' and frequency = 'curvature'. "
       "Type: text (REBOUND lists its storage type). Default 'none'.",
       REB_INT, "fitting", offsetof(struct pfvi_state, options.fitting), 0, 0, pfvi_fitting_enum },
     { "Source of the frequency omega, per particle, at the start of each step, from its "
       "position d and velocity w relative to its centre (see centre) and its acceleration a. "
       "With the centre 'partner', a is the partner's attraction: the frequencies are the pair's. "
-      "'radial' (default): sqrt(-a.d)/|d|, so that the harmonic part -omega^2 d carries the whole "
+      "'mean-motion' (default): the mean motion "
+      "sqrt(mu/A^3) of the osculating two-body orbit about the particle's partner (see "
+      "centre; mu = G (m + m_partner)), a constant of the unperturbed two-body motion; 0 if "
+      "unbound or without a partner: no energy drift with fixed steps, and the most accurate in a "
+      "hierarchy (same docs). 'radial': sqrt(-a.d)/|d|, so that the harmonic part -omega^2 d carries the whole "
       "pull towards the centre at the step's start (about a partner, G (m + m_partner)/r^3: its "
-      "whole attraction); 0 if a points away from it. With fixed steps it drifts in energy at high e "
-      "(same docs). 'curvature' (K&V, 'Frequency Evaluation and Error Control'): "
+      "whole attraction); 0 if a points away from it: the most accurate on two bodies with fixed "
+      "steps, but it drifts in energy at high e (same docs). 'curvature' (K&V, 'Frequency Evaluation and Error Control'): "
       "|w x a|/|w|^2, the angular rate on the osculating circle; 0 on a straight line or at rest. "
-      "'mean-motion': the mean motion "
-      "sqrt(mu/A^3) of the osculating two-body orbit about the particle's partner (the body of "
-      "largest G (m + m_j)/r^3; mu = G (m + m_partner)), a constant of the unperturbed two-body motion; 0 if "
-      "unbound or without a partner; no drift with fixed steps. 'fixed': the field omega, for every "
-      "particle. Type: text. Default 'radial'.",
+      "'fixed': the field omega, for every "
+      "particle. Type: text. Default 'mean-motion'.",
       REB_INT, "frequency", offsetof(struct pfvi_state, options.frequency), 0, 0, pfvi_frequency_enum },
     { "The centre of each particle's harmonic model: the fitted interpolation is applied to "
       "d = q - c(t), with c moving over the step from its position, velocity and acceleration at "
@@ -220,7 +221,7 @@ static void* pfvi_create(void){
     }
     st->options = (struct pfvi_options){
         .fitting = PFVI_FITTING_NONE,
-        .frequency = PFVI_FREQUENCY_RADIAL,
+        .frequency = PFVI_FREQUENCY_MEAN_MOTION,
         .stages = PFVI_STAGES_DEFAULT,
         .omega = 0.,
         .u_max = PFVI_U_MAX_DEFAULT,
