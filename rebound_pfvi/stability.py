@@ -353,11 +353,13 @@ class Config:
     fitting: Optional[str] = None
     stages: Optional[int] = None
     epsilon: Optional[float] = None
+    step_control: Optional[str] = None  # pfvi's default if None
 
     @property
     def label(self) -> str:
         if self.family == "pfvi":
-            return f"pfvi {self.fitting} s={self.stages}"
+            control = f" {self.step_control}" if self.step_control else ""
+            return f"pfvi {self.fitting} s={self.stages}{control}"
         return self.family.upper() if self.family != "whfast" else "WHFast"
 
 
@@ -383,7 +385,7 @@ def configure(sim: rebound.Simulation, case: Case, config: Config) -> None:
         # dt: the fixed step, or the cap on adaptive steps
         configure_integrator(sim, "pfvi", dt=case.fixed_dt if fixed else case.time_scale / 10.0,
                              fitting=config.fitting, stages=config.stages, epsilon=0.0 if fixed else config.epsilon,
-                             **SEED_MODEL)
+                             **SEED_MODEL, **({"step_control": config.step_control} if config.step_control else {}))
     elif config.family == "ias15":
         configure_integrator(sim, "ias15", dt=case.fixed_dt if case.fixed_dt is not None else case.time_scale / 100.0,
                              epsilon=config.epsilon)
@@ -416,7 +418,8 @@ def _positions(sim):
 def _identity(case_name: str, config: Config, budget: float) -> Run:
     """A run of `config` on a case before it has run (no finite state yet)."""
     return Run(runs.STABILITY, case_name, config.family, config.label, budget_s=budget, finite=False,
-               options={"fitting": config.fitting, "stages": config.stages, "epsilon": config.epsilon})
+               options={"fitting": config.fitting, "stages": config.stages, "epsilon": config.epsilon,
+                        **({"step_control": config.step_control} if config.step_control else {})})
 
 
 def run(case_name: str, config: Config, budget: float) -> Run:

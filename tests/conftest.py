@@ -99,6 +99,8 @@ STEP_MODES = {
     "seed-s4": (4, 1e-7, "seed"),
     "reversible-s2": (2, 1e-7, "reversible"),
     "reversible-s4": (4, 1e-7, "reversible"),
+    "symmetric-s2": (2, 1e-7, "symmetric"),
+    "symmetric-s4": (4, 1e-7, "symmetric"),
 }
 
 

@@ -32,7 +32,7 @@ def test_defaults_are_adaptive_and_documented():
     sim = rebound.Simulation()
     sim.integrator = "pfvi"
     assert sim.integrator.epsilon == 1e-6
-    assert sim.integrator.step_control == "reversible"
+    assert sim.integrator.step_control == "symmetric"
     assert "osculating" in sim.integrator.__doc__
 
 

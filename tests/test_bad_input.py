@@ -52,7 +52,7 @@ def set_raw(sim, field, value):
     ("epsilon", -1e-6, r"integrator\.epsilon = -1e-06 is not valid; it must be finite and >= 0"),
     ("epsilon", math.nan, r"integrator\.epsilon = nan is not valid"),
     ("epsilon", math.inf, r"integrator\.epsilon = inf is not valid"),
-    ("step_control", 2, r"integrator\.step_control = 2 is not valid; allowed: 'seed', 'reversible'"),
+    ("step_control", 3, r"integrator\.step_control = 3 is not valid; allowed: 'seed', 'reversible', 'symmetric'"),
 ])
 def test_invalid_field_values(field, value, match, stages):
     sim = pfvi_sim(stages)

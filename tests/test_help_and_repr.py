@@ -57,7 +57,7 @@ def test_repr_shows_options_and_statistics_and_no_scratch_pointers():
     text = repr(sim.integrator)
     for name in documented_fields(sim):
         assert f"{name}=" in text
-    assert "fitting=none" in text and "centre=partner" in text and "step_control=reversible" in text
+    assert "fitting=none" in text and "centre=partner" in text and "step_control=symmetric" in text
     assert "compensation" not in text and "stage_accelerations" not in text
     assert len(re.findall(r"0x[0-9a-f]+", text)) == 1  # the object's own address only
     ias15 = rebound.Simulation()

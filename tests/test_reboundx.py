@@ -12,6 +12,7 @@ import sys
 import pytest
 
 from rebound_pfvi import compare, scenes
+from rebound_pfvi.integrators import SEED_MODEL
 from rebound_pfvi.__main__ import main
 
 
@@ -42,6 +43,11 @@ def _advance(integrator, epsilon, gr=True, velocity_dependent=None):
         sim.add(m=scene.MASS, a=scene.A, e=scene.E)
         sim.move_to_com()
     sim.integrator = integrator
+    if integrator == "pfvi":  # as measured: the seed's scheme and the osculating-circle control
+        sim.integrator.fitting = "phase"
+        sim.integrator.step_control = "reversible"
+        for name, value in SEED_MODEL.items():
+            setattr(sim.integrator, name, value)
     sim.integrator.epsilon = epsilon
     sim.dt = scene.period / (10.0 if integrator == "pfvi" else 100.0)
     if velocity_dependent is not None:

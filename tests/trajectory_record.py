@@ -58,7 +58,7 @@ def runs():
                                                       "step_control": control}, 40, 0.01, False)
     for s in (2, 3):
         table[f"drag-s{s}"] = ({**SEED, "stages": s, "epsilon": 0.0}, 60, 0.01, True)
-    table["backward-s4"] = ({**SEED, "stages": 4, "epsilon": 1e-7}, 40, -0.01, False)
+    table["backward-s4"] = ({**SEED, "stages": 4, "epsilon": 1e-7, "step_control": "reversible"}, 40, -0.01, False)
     # Added with fitting 'exact' (issue 14).
     for s in (2, 3, 4, 6):
         for frequency in ("curvature", "radial", "mean-motion"):
@@ -67,8 +67,8 @@ def runs():
     table["fixed-s4-exact-barycentre"] = ({**EXACT, "stages": 4, "frequency": "radial", "centre": "barycentre",
                                            "epsilon": 0.0}, 60, 0.01, False)
     for s in (2, 4):
-        table[f"reversible-s{s}-exact"] = ({**EXACT, "stages": s, "frequency": "radial", "epsilon": 1e-7}, 40, 0.01,
-                                           False)
+        table[f"reversible-s{s}-exact"] = ({**EXACT, "stages": s, "frequency": "radial", "epsilon": 1e-7,
+                                            "step_control": "reversible"}, 40, 0.01, False)
         table[f"drag-s{s}-exact"] = ({**EXACT, "stages": s, "frequency": "radial", "epsilon": 0.0}, 60, 0.01, True)
     return table
 

@@ -64,7 +64,8 @@
 
 #define PFVI_STEP_CONTROLS(X) \
     X(PFVI_STEP_CONTROL_SEED, 0, "seed")              /* accept/reject on the estimate, propose the next h */ \
-    X(PFVI_STEP_CONTROL_REVERSIBLE, 1, "reversible")  /* h solves estimate(y_n, y_n+1) = epsilon */
+    X(PFVI_STEP_CONTROL_REVERSIBLE, 1, "reversible")  /* h solves estimate(y_n, y_n+1) = epsilon */ \
+    X(PFVI_STEP_CONTROL_SYMMETRIC, 2, "symmetric")    /* h = kappa/rho, rho the pairs' frequency tracked time-symmetrically: one solve per step */
 
 #define PFVI_ENUM_VALUE(symbol, value, name) symbol = value,
 enum pfvi_fitting { PFVI_FITTINGS(PFVI_ENUM_VALUE) };
@@ -113,6 +114,19 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // step equation counts as solved (raised to the estimate's round-off level).
 #define PFVI_REVERSIBLE_MAX_TRIALS 40
 #define PFVI_REVERSIBLE_TOLERANCE 1e-10
+// The symmetric step (pfvi_control.c): h = kappa/rho, with rho tracking the
+// step density sigma = (sum_i omega_i^K)^(1/K) of the pairs' frequencies
+// omega_i^2 = G (m_i + m_partner)/r^3, and kappa = (epsilon/C_s)^(1/(2s - 2))
+// (C_s: PFVI_SYMMETRIC_CONSTANTS, measured so that epsilon is about the
+// relative position error per orbit at e = 0.5), at most KAPPA_MAX.
+#define PFVI_DENSITY_NORM 8
+// e^2 beyond which the eccentricity factor (1 - e^2)^(-gamma) is held
+// (e = 0.999; unbound and radial pairs get it too): beyond it epsilon's
+// meaning is not kept (the factor would reach 1000 at s = 2 by e = 0.99995).
+#define PFVI_DENSITY_E2_MAX 0.998
+#define PFVI_SYMMETRIC_CONSTANTS {0., 0., 14., 0.32, 0.019, 8.3e-4, 4.4e-5}
+#define PFVI_SYMMETRIC_BETA {0., 0., 1.5, 2.2, 2.5, 3.0, 3.4}
+#define PFVI_KAPPA_MAX 1.0
 
 /* ---------------------------------------------------- quadrature (lobatto) */
 
@@ -292,6 +306,14 @@ PFVI_INTERNAL void pfvi_centres(const struct reb_particle* p, const struct pfvi_
 // "radial" (about a partner G (m + m_partner)/r^3: -omega^2 d is then the
 // partner's whole attraction), the osculating mean motion about the partner
 // for "mean-motion" (0 if unbound or without a partner).
+// The step density of the symmetric step control at the particles p (with
+// the accelerations of `start`, or p's own if NULL) and the partners of c:
+// sigma = (sum_i sigma_i^K)^(1/K) over particles with a partner, sigma_i =
+// omega_i (1 - e_i^2)^(-gamma) with omega_i^2 = mu_i/r_i^3 and e_i the pair's
+// osculating eccentricity, and its logarithmic time derivative
+// d log(sigma)/dt. Returns 0 (sigma = 0) if no particle has a partner.
+PFVI_INTERNAL int pfvi_density(const struct reb_particle* p, const struct pfvi_end_state* start,
+        const struct pfvi_centre* c, size_t N, double gamma, double* sigma, double* dlog_sigma);
 PFVI_INTERNAL double pfvi_frequency(const struct pfvi_options* o, const struct reb_particle* p,
         const struct reb_particle* partner, const struct pfvi_centre* c, const double a[3]);
 
@@ -385,8 +407,12 @@ struct pfvi_fault {
 struct pfvi_state {
     struct pfvi_options options;
     struct pfvi_statistics statistics;
-    // Controller state (saved): the last solution of the reversible step equation.
+    // Controller state (saved): the last solution of the reversible step
+    // equation; the symmetric step's density rho of the last step and the
+    // direction it was taken in (rho = 0: start afresh).
     double dt_reversible;
+    double rho;
+    double rho_sign;
     struct pfvi_trial_record trial;
     struct pfvi_fault fault;
 
@@ -442,6 +468,8 @@ struct pfvi_state {
     double predictor_h;
     double predictor_t;            // t at its end
     size_t cache_N;                // >0: `end` describes the particles, taken at cache_t under cache_model
+    size_t end_N;                  // >0: `end` holds the particles as the last step left them (edits are
+                                   // found against it; REBOUND's synchronize clears cache_N, not this)
     double cache_t;
     struct pfvi_force_model cache_model;
     // Particles added or removed by a callback during a step (a force

@@ -165,3 +165,87 @@ double pfvi_frequency(const struct pfvi_options* o, const struct reb_particle* p
         }
     }
 }
+
+// One pair's contribution to the step density: omega (mu/r^3)^(1/2) times
+// (1 - e^2)^(-gamma) (e: the pair's osculating eccentricity, capped), and the
+// time derivative of its logarithm, -3/2 (r.v)/r^2 + gamma d(e^2)/dt/(1 - e^2)
+// with d(e^2)/dt from the acceleration beyond the pair's own pull (zero for
+// an isolated pair). Returns 0 where omega is not a finite positive number.
+static int pair_density(const double r[3], const double v[3], const double a_rel[3], double mu, double gamma,
+        double* sigma, double* dlog){
+    const double r2 = r[0]*r[0] + r[1]*r[1] + r[2]*r[2];
+    const double rn = sqrt(r2);
+    const double omega = sqrt(mu/(r2*rn));
+    if (!(omega > 0.) || !isfinite(omega)){
+        return 0;
+    }
+    const double rv = r[0]*v[0] + r[1]*v[1] + r[2]*v[2];
+    const double v2 = v[0]*v[0] + v[1]*v[1] + v[2]*v[2];
+    double ev[3], de[3], pert[3];
+    for (int k=0; k<3; k++){
+        pert[k] = a_rel[k] + mu*r[k]/(r2*rn);   // beyond the pair's pull
+    }
+    const double vp = v[0]*pert[0] + v[1]*pert[1] + v[2]*pert[2];
+    const double rp = r[0]*pert[0] + r[1]*pert[1] + r[2]*pert[2];
+    double e2 = 0., de2 = 0.;
+    for (int k=0; k<3; k++){
+        ev[k] = ((v2 - mu/rn)*r[k] - rv*v[k])/mu;
+        de[k] = (2.*vp*r[k] - rp*v[k] - rv*pert[k])/mu;
+        e2 += ev[k]*ev[k];
+        de2 += 2.*ev[k]*de[k];
+    }
+    double factor = 1., dlog_factor = 0.;
+    if (gamma > 0.){
+        const double bound = (e2 < PFVI_DENSITY_E2_MAX) ? 1. - e2 : 1. - PFVI_DENSITY_E2_MAX;
+        factor = pow(bound, -gamma);
+        dlog_factor = (e2 < PFVI_DENSITY_E2_MAX) ? gamma*de2/bound : 0.;
+    }
+    *sigma = omega*factor;
+    *dlog = -1.5*rv/r2 + dlog_factor;
+    return isfinite(*sigma) && isfinite(*dlog);
+}
+
+int pfvi_density(const struct reb_particle* p, const struct pfvi_end_state* start, const struct pfvi_centre* c,
+        size_t N, double gamma, double* sigma, double* dlog_sigma){
+    // Per pair: sigma_i and its rate into scratch-free running sums, scaled by
+    // the largest sigma_i (found first) so that sigma_i^K cannot overflow.
+    double sigma_max = 0.;
+    for (int pass=0; pass<2; pass++){
+        double sum = 0., weighted = 0.;
+        for (size_t i=0; i<N; i++){
+            const size_t j = c[i].partner;
+            if (j == SIZE_MAX){
+                continue;
+            }
+            const double r[3] = {p[i].x - p[j].x, p[i].y - p[j].y, p[i].z - p[j].z};
+            const double v[3] = {p[i].vx - p[j].vx, p[i].vy - p[j].vy, p[i].vz - p[j].vz};
+            double a_rel[3];
+            for (int k=0; k<3; k++){
+                const double ai = start ? start[i].a[k] : (&p[i].ax)[k];
+                const double aj = start ? start[j].a[k] : (&p[j].ax)[k];
+                a_rel[k] = ai - aj;
+            }
+            double s_i, g_i;
+            if (!pair_density(r, v, a_rel, c[i].mu, gamma, &s_i, &g_i)){
+                continue;
+            }
+            if (pass == 0){
+                sigma_max = fmax(sigma_max, s_i);
+            }else{
+                const double w = pow(s_i/sigma_max, PFVI_DENSITY_NORM);
+                sum += w;
+                weighted += w*g_i;
+            }
+        }
+        if (pass == 0 && !(sigma_max > 0.)){
+            *sigma = 0.;
+            *dlog_sigma = 0.;
+            return 0;
+        }
+        if (pass == 1){
+            *sigma = sigma_max*pow(sum, 1./PFVI_DENSITY_NORM);
+            *dlog_sigma = weighted/sum;
+        }
+    }
+    return 1;
+}

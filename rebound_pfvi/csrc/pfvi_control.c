@@ -255,7 +255,86 @@ static double control_reversible(struct reb_simulation* r, struct pfvi_state* st
     return h;
 }
 
+// kappa = (epsilon/C_s)^(1/(2s - 2)): the step in units of 1/sigma.
+static double symmetric_kappa(const struct pfvi_options* o){
+    static const double constant[PFVI_STAGES_MAX + 1] = PFVI_SYMMETRIC_CONSTANTS;
+    const double kappa = pow(o->epsilon/constant[o->stages], 1./(2.*o->stages - 2.));
+    return fmin(kappa, PFVI_KAPPA_MAX);
+}
+
+// gamma_s of the eccentricity factor: the error per orbit at fixed kappa grows
+// like (1 - e)^(-beta_s); (1 - e^2)^(-beta_s/(2s - 2)) in sigma evens it out.
+static double symmetric_gamma(const struct pfvi_options* o){
+    static const double beta[PFVI_STAGES_MAX + 1] = PFVI_SYMMETRIC_BETA;
+    return beta[o->stages]/(2.*o->stages - 2.);
+}
+
+// The symmetric step (Hairer & Soderlind 2005, SIAM J. Sci. Comput. 26,
+// 1838): h_n = kappa/rho_n+1/2 with
+//     rho_n+1/2 = rho_n-1/2 + kappa G(y_n),   G = d log(sigma)/dt,
+// an explicit update that is the same read forward or backward, so that rho
+// tracks the density sigma of pfvi_density along the orbit and the sequence
+// of steps reverses exactly. One stage solve per step; a solve that does not
+// converge is retried at half the step (counted in n_rejected and
+// n_asymmetric). Without pairs (no gravity, or no massive body) the steps
+// are sim.dt.
+static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
+    const double sign = copysign(1., r->dt), cap = fabs(r->dt);
+    const double kappa = symmetric_kappa(&st->options);
+    double sigma, g;
+    const double gamma = symmetric_gamma(&st->options);
+    const int paired = pfvi_density(st->start, st->end, st->centre, N, gamma, &sigma, &g);
+    double rho = 0., h = cap;
+    if (paired){
+        if (st->rho > 0. && st->rho_sign == sign){
+            rho = st->rho + sign*kappa*g;
+        }else if (st->rho > 0. && st->rho_sign == -sign){
+            rho = st->rho;  // reversing: the last step's density, read backward
+        }
+        if (!(rho > 0.) || !isfinite(rho)){
+            // First step, edited particles, or the track lost: start from sigma.
+            rho = sigma + 0.5*sign*kappa*g;
+            rho = (rho > 0.) ? rho : sigma;
+        }
+        h = fmin(kappa/rho, cap);
+    }
+    for (;;){
+        const enum pfvi_trial trial = pfvi_trial_step(r, st, N, t0, sign*h);
+        if (trial == PFVI_TRIAL_ERROR){
+            return 0.;
+        }
+        if (trial == PFVI_TRIAL_OK){
+            break;
+        }
+        st->statistics.n_rejected++;
+        st->statistics.n_asymmetric++;
+        h *= 0.5;
+        if (t0 + sign*h == t0){
+            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_NOT_CONVERGED, .n = (size_t)st->options.stages,
+                .value = st->trial.change, .rounds = st->trial.rounds, .t0 = t0};
+            return 0.;
+        }
+    }
+    h *= sign;
+    pfvi_commit_step(r, st, N, h);
+    st->statistics.error_estimate = 0.;
+    st->rho = paired ? rho : 0.;
+    st->rho_sign = sign;
+    if (paired){
+        // Propose exactly the next step, so that REBOUND shortens it only to
+        // finish on time; the next step's start recomputes it the same way.
+        double sigma1, g1;
+        pfvi_density(r->particles, NULL, st->centre, N, gamma, &sigma1, &g1);
+        const double rho_next = rho + sign*kappa*g1;
+        r->dt = sign*kappa/((rho_next > 0.) ? rho_next : sigma1);
+    }
+    return h;
+}
+
 double pfvi_controlled_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
+    if (st->options.step_control == PFVI_STEP_CONTROL_SYMMETRIC){
+        return control_symmetric(r, st, N, t0);
+    }
     const struct reb_particle* const p0 = st->start;
     double omega_start_max = 0.;
     for (size_t i=0; i<N; i++){

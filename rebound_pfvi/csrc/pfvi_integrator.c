@@ -177,6 +177,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_POINTER, "stage_positions", offsetof(struct pfvi_state, predictor_x),
         offsetof(struct pfvi_state, predictor_N), sizeof(*((struct pfvi_state*)0)->predictor_x), 0 },
     { "", REB_DOUBLE, "dt_reversible", offsetof(struct pfvi_state, dt_reversible), 0, 0, 0 },
+    { "", REB_DOUBLE, "rho", offsetof(struct pfvi_state, rho), 0, 0, 0 },
+    { "", REB_DOUBLE, "rho_sign", offsetof(struct pfvi_state, rho_sign), 0, 0, 0 },
     { "", REB_INT, "predictor_stages", offsetof(struct pfvi_state, predictor_stages), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_h", offsetof(struct pfvi_state, predictor_h), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_t", offsetof(struct pfvi_state, predictor_t), 0, 0, 0 },
@@ -226,7 +228,7 @@ static void* pfvi_create(void){
         .omega = 0.,
         .u_max = PFVI_U_MAX_DEFAULT,
         .epsilon = PFVI_EPSILON_DEFAULT,
-        .step_control = PFVI_STEP_CONTROL_REVERSIBLE,
+        .step_control = PFVI_STEP_CONTROL_SYMMETRIC,
         .centre = PFVI_CENTRE_PARTNER,
     };
     return st;
@@ -455,7 +457,8 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
     const struct reb_particle* const p0 = st->start;
     const struct pfvi_options* const o = &st->options;
     const int fitted = (o->fitting != PFVI_FITTING_NONE);
-    const int need_partner = fitted && (o->centre == PFVI_CENTRE_PARTNER || o->frequency == PFVI_FREQUENCY_MEAN_MOTION);
+    const int need_partner = (fitted && (o->centre == PFVI_CENTRE_PARTNER || o->frequency == PFVI_FREQUENCY_MEAN_MOTION))
+        || (o->epsilon > 0. && o->step_control == PFVI_STEP_CONTROL_SYMMETRIC);
     pfvi_centres(p0, e, N, r->N_active, (r->gravity == REB_GRAVITY_NONE) ? 0. : r->G,
             fitted ? o->centre : PFVI_CENTRE_ORIGIN, need_partner, st->centre);
     for (size_t i=0; i<N; i++){

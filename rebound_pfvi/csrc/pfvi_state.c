@@ -58,6 +58,8 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
         memset(comp, 0, N*sizeof(struct pfvi_compensation));
         st->compensation = comp;
         st->N_compensation = N;
+        st->rho = 0.;  // the symmetric step's density described the old particles
+        st->end_N = 0;
     }
     if (N <= st->N_allocated){
         return 1;
@@ -152,6 +154,7 @@ void pfvi_keep_end(const struct reb_simulation* r, struct pfvi_state* st, size_t
     st->cache_N = N;
     st->cache_t = r->t;
     st->cache_model = pfvi_force_model_of(r);
+    st->end_N = N;
 }
 
 // A particle the user edited (or replaced) since the last step keeps nothing
@@ -159,7 +162,7 @@ void pfvi_keep_end(const struct reb_simulation* r, struct pfvi_state* st, size_t
 // dropped, so that continuing equals starting afresh from the edited state.
 void pfvi_forget_edited(const struct reb_simulation* r, struct pfvi_state* st){
     const size_t N = r->N;
-    if (st->cache_N != N || st->N_compensation != N){
+    if (st->end_N != N || st->N_compensation != N){
         return;  // N changed (compensation already cleared) or no step to compare with
     }
     const struct reb_particle* const ps = r->particles;
@@ -173,6 +176,7 @@ void pfvi_forget_edited(const struct reb_simulation* r, struct pfvi_state* st){
     }
     if (edited){
         st->predictor_stages = 0;
+        st->rho = 0.;  // the symmetric step's density no longer describes them
     }
 }
 
