@@ -413,6 +413,7 @@ struct pfvi_state {
     double dt_reversible;
     double rho;
     double rho_sign;
+    double dt_proposed;            // the r->dt the symmetric step last proposed
     struct pfvi_trial_record trial;
     struct pfvi_fault fault;
 

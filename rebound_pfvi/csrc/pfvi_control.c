@@ -278,13 +278,22 @@ static double symmetric_gamma(const struct pfvi_options* o){
 // converge is retried at half the step (counted in n_rejected and
 // n_asymmetric). Without pairs (no gravity, or no massive body) the steps
 // are sim.dt.
+//
+// sim.dt is the step proposed after each step. If it is still that (or only
+// its sign was flipped: REBOUND integrating back to a time it overshot, or
+// the user reversing), the step is kappa/rho; if it was changed (REBOUND
+// shortening the last step to finish on time, or the user), it caps the
+// step, and a capped step ends the track: rho starts afresh from sigma at
+// the next step, since it no longer belongs to the state it arrives at.
 static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
-    const double sign = copysign(1., r->dt), cap = fabs(r->dt);
+    const double sign = copysign(1., r->dt);
+    const int proposed = (st->rho > 0. && fabs(r->dt) == fabs(st->dt_proposed));
+    const double cap = proposed ? INFINITY : fabs(r->dt);
     const double kappa = symmetric_kappa(&st->options);
     double sigma, g;
     const double gamma = symmetric_gamma(&st->options);
     const int paired = pfvi_density(st->start, st->end, st->centre, N, gamma, &sigma, &g);
-    double rho = 0., h = cap;
+    double rho = 0., h = fabs(r->dt);  // without pairs: sim.dt
     if (paired){
         if (st->rho > 0. && st->rho_sign == sign){
             rho = st->rho + sign*kappa*g;
@@ -298,6 +307,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         }
         h = fmin(kappa/rho, cap);
     }
+    const int capped = paired && h < kappa/rho;
     for (;;){
         const enum pfvi_trial trial = pfvi_trial_step(r, st, N, t0, sign*h);
         if (trial == PFVI_TRIAL_ERROR){
@@ -318,15 +328,16 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     h *= sign;
     pfvi_commit_step(r, st, N, h);
     st->statistics.error_estimate = 0.;
-    st->rho = paired ? rho : 0.;
+    st->rho = (paired && !capped && fabs(h) == kappa/rho) ? rho : 0.;
     st->rho_sign = sign;
     if (paired){
         // Propose exactly the next step, so that REBOUND shortens it only to
         // finish on time; the next step's start recomputes it the same way.
         double sigma1, g1;
         pfvi_density(r->particles, NULL, st->centre, N, gamma, &sigma1, &g1);
-        const double rho_next = rho + sign*kappa*g1;
+        const double rho_next = (st->rho > 0.) ? rho + sign*kappa*g1 : sigma1 + 0.5*sign*kappa*g1;
         r->dt = sign*kappa/((rho_next > 0.) ? rho_next : sigma1);
+        st->dt_proposed = r->dt;
     }
     return h;
 }
