@@ -1,0 +1,150 @@
+"""The symmetric step control (the default): one stage solve per step,
+time-reversible, steps following epsilon, epsilon = the relative position
+error per orbit (issue 16)."""
+import math
+
+import pytest
+import rebound
+
+from rebound_pfvi.integrators import configure
+from rebound_pfvi.scenes import Kepler
+
+
+def kepler(e, s, epsilon, orbits=10, **options):
+    scene = Kepler(e=e, periods=orbits)
+    sim = scene.build()
+    configure(sim, "pfvi", dt=scene.period / 10, stages=s, epsilon=epsilon, **options)
+    return scene, sim
+
+
+def steps_per_orbit(e, s, epsilon):
+    scene, sim = kepler(e, s, epsilon, orbits=2)
+    sim.integrate(scene.t_end, exact_finish_time=0)
+    return sim.integrator.n_steps / 2
+
+
+@pytest.mark.parametrize("s", [4, 6])
+def test_steps_follow_the_power_of_epsilon(s):
+    # The step is kappa/rho with kappa = (epsilon/C_s)^(1/(2s - 2)): the
+    # number of steps goes like epsilon^(-1/(2s - 2)), within 15%.
+    fine, coarse = steps_per_orbit(0.5, s, 1e-12), steps_per_orbit(0.5, s, 1e-6)
+    slope = math.log(fine / coarse) / math.log(1e6)
+    assert abs(slope - 1 / (2 * s - 2)) < 0.15 / (2 * s - 2), slope
+
+
+@pytest.mark.parametrize("epsilon", [1e-8, 1e-10, 1e-12])
+def test_six_stages_take_fewer_steps_than_four(epsilon):
+    assert steps_per_orbit(0.9, 6, epsilon) < steps_per_orbit(0.9, 4, epsilon)
+
+
+@pytest.mark.parametrize("s", [2, 4, 6])
+def test_one_stage_solve_per_step(s):
+    scene, sim = kepler(0.9, s, 1e-6 if s > 2 else 1e-4)
+    sim.integrate(scene.t_end)
+    assert sim.integrator.n_attempts == sim.integrator.n_steps
+    assert sim.integrator.n_rejected == 0
+
+
+@pytest.mark.parametrize("fitting", ["none", "exact"])
+def test_forward_then_backward_returns_to_the_start(fitting):
+    # 10 orbits at e = 0.9, s = 4, then the same number of steps back.
+    scene, sim = kepler(0.9, 4, 1e-8, fitting=fitting)
+    start = [(p.x, p.y, p.vx, p.vy) for p in sim.particles]
+    sim.integrate(scene.t_end, exact_finish_time=0)
+    n = sim.integrator.n_steps
+    sim.dt = -sim.dt
+    sim.steps(n)
+    worst = max(abs(a - b) / max(abs(b), 1e-300) if abs(b) > 1e-3 else abs(a - b)
+                for p, q in zip(sim.particles, start) for a, b in zip((p.x, p.y, p.vx, p.vy), q))
+    assert worst < 1e-10, worst
+    assert abs(sim.t) < 1e-12
+
+
+def test_reversal_by_integrating_back_retraces_the_steps():
+    # REBOUND integrates back when asked for an earlier time: the steps are
+    # the forward ones, read backward, so the same number of them (one more
+    # if the rounding of t leaves it a hair above 0 after them).
+    scene, sim = kepler(0.9, 4, 1e-8)
+    sim.integrate(scene.t_end, exact_finish_time=0)
+    n = sim.integrator.n_steps
+    first_step = sim.t - scene.t_end
+    sim.integrate(0.0, exact_finish_time=0)
+    assert 2 * n <= sim.integrator.n_steps <= 2 * n + 1
+    assert sim.integrator.n_rejected == 0 and sim.integrator.n_asymmetric == 0
+    assert first_step >= 0.0
+
+
+@pytest.mark.parametrize("s, epsilon", [(2, 1e-5), (4, 1e-8), (6, 1e-10)])
+@pytest.mark.parametrize("e", [0.0, 0.3, 0.6, 0.9, 0.99])
+def test_epsilon_is_the_relative_position_error_per_orbit(s, epsilon, e):
+    # Documented: the largest position error over the run, relative to a and
+    # per orbit, is at most about epsilon (measured 0.1 to 1.0 epsilon for
+    # e >= 0.5, less on rounder orbits); 5 orbits.
+    orbits = 5
+    scene, sim = kepler(e, s, epsilon, orbits=orbits)
+    reference = scene.reference()
+    worst = 0.0
+    for k in range(1, 4 * orbits + 1):
+        sim.integrate(k * scene.period / 4, exact_finish_time=0)
+        worst = max(worst, scene.position_error(sim, reference))
+    per_orbit = worst / scene.a / orbits
+    assert per_orbit <= 1.5 * epsilon, per_orbit / epsilon
+    if e >= 0.6:
+        assert per_orbit >= 0.03 * epsilon, per_orbit / epsilon  # not needlessly small
+
+
+@pytest.mark.parametrize("s", [4, 6])
+def test_no_energy_drift_over_2000_orbits(s):
+    # e = 0.95, m = 1e-3, COM frame, default settings: the largest energy
+    # error of the last tenth within 1.5 times that of the first (sampled 10
+    # times per orbit, which also makes REBOUND step back and forth over the
+    # sampling times: the track must survive it).
+    scene = Kepler(e=0.95, periods=2000)
+    sim = scene.build()
+    sim.integrator = "pfvi"
+    sim.integrator.stages = s
+    sim.dt = scene.period / 100
+    E0 = sim.energy()
+    errors = []
+    for k in range(1, 20001):
+        sim.integrate(k * scene.period / 10, exact_finish_time=0)
+        errors.append(abs(sim.energy() / E0 - 1))
+    first, last = max(errors[:2000]), max(errors[-2000:])
+    assert last <= 1.5 * first, (first, last)
+    assert first < 1e-7
+
+
+def test_a_capped_step_restarts_the_track_from_the_density():
+    # Finishing on time shortens the last step of every integrate() call;
+    # the next call starts its density afresh and the run stays accurate.
+    scene, sim = kepler(0.95, 4, 1e-8, orbits=20)
+    reference = scene.reference()
+    for k in range(1, 20 * 7 + 1):
+        sim.integrate(k * scene.period / 7)  # exact finish: a capped step per call
+    assert scene.position_error(sim, reference) / 20 < 1e-8
+
+
+def test_without_pairs_the_steps_are_sim_dt():
+    sim = rebound.Simulation()
+    sim.gravity = "none"
+    sim.add(m=1.0, x=1.0, vy=1.0)
+    sim.integrator = "pfvi"
+    sim.dt = 0.125
+    sim.integrate(1.0)
+    assert sim.integrator.n_steps == 8 and sim.particles[0].y == 1.0
+
+
+@pytest.mark.parametrize("s", [2, 4])
+@pytest.mark.parametrize("exact_finish_time", [0, 1])
+def test_archive_continuation_is_bit_identical(tmp_path, s, exact_finish_time):
+    # rho, its direction and the proposed step are saved with the simulation.
+    scene, sim = kepler(0.9, s, 1e-6)
+    sim.integrate(0.37 * scene.period, exact_finish_time=exact_finish_time)
+    path = str(tmp_path / "run.bin")
+    sim.save_to_file(path)
+    loaded = rebound.Simulation(path)
+    for run in (sim, loaded):
+        run.integrate(2.3 * scene.period, exact_finish_time=exact_finish_time)
+    assert loaded.t == sim.t and loaded.integrator.n_steps == sim.integrator.n_steps
+    for p, q in zip(sim.particles, loaded.particles):
+        assert (p.x, p.y, p.z, p.vx, p.vy, p.vz) == (q.x, q.y, q.z, q.vx, q.vy, q.vz)
