@@ -83,8 +83,14 @@ class Setting:
 
 #: Default sweeps. "quick" is what `rebound-pfvi compare` runs without --full.
 PFVI_EPSILONS = {"quick": (1e-4, 1e-6, 1e-8, 1e-10), "full": tuple(10.0 ** -k for k in range(4, 12))}
-PFVI_STAGES = {"quick": (2, 4), "full": (2, 4, 6)}
-PFVI_FITTINGS = ("phase", "none")
+#: pfvi's lines: (stages, fitting, step_control). The default (symmetric
+#: steps, no fitting) at several orders, and the seed's fitting under the
+#: osculating-circle control, the default before it, for comparison.
+PFVI_LINES = {"quick": ((4, "none", "symmetric"), (6, "none", "symmetric"), (4, "phase", "reversible")),
+              "full": ((2, "none", "symmetric"), (4, "none", "symmetric"), (6, "none", "symmetric"),
+                       (4, "exact", "symmetric"), (4, "phase", "reversible"), (4, "none", "reversible"))}
+#: With a given frequency (the oscillator's): the seed's fitting, s = 2 and 4.
+PFVI_FIXED_LINES = ((2, "phase", "reversible"), (4, "phase", "reversible"))
 IAS15_EPSILONS = {"quick": (1e-3, 1e-5, 1e-7, 1e-9), "full": tuple(10.0 ** -k for k in range(2, 10))}
 BS_EPS = {"quick": (1e-4, 1e-7, 1e-10, 1e-13), "full": tuple(10.0 ** -k for k in range(4, 14))}
 FIXED_STEPS = {"quick": (100, 1000, 10000), "full": (30, 100, 300, 1000, 3000, 10000, 30000)}
@@ -107,13 +113,15 @@ def default_settings(scene: Scene, size: str = "quick",
             continue
         if family == "pfvi":
             for frequency in scene.pfvi_frequencies:
-                for stages in PFVI_STAGES[size]:
-                    for fitting in PFVI_FITTINGS:
-                        if frequency != "curvature" and fitting == "none":
-                            continue  # "none" ignores the frequency
-                        for epsilon in PFVI_EPSILONS[size]:
-                            settings.append(Setting("pfvi", epsilon, (("stages", stages), ("fitting", fitting),
-                                                                      ("frequency", frequency))))
+                lines = PFVI_LINES[size] if frequency == "curvature" else PFVI_FIXED_LINES
+                for stages, fitting, control in lines:
+                    for epsilon in PFVI_EPSILONS[size]:
+                        options: Tuple[Tuple[str, Any], ...] = (("stages", stages), ("fitting", fitting))
+                        if frequency != "curvature":
+                            options += (("frequency", frequency),)
+                        if control != "reversible":
+                            options += (("step_control", control),)
+                        settings.append(Setting("pfvi", epsilon, options))
         elif family == "ias15":
             settings += [Setting("ias15", x) for x in IAS15_EPSILONS[size]]
         elif family == "bs":
@@ -128,10 +136,16 @@ def configure(sim: rebound.Simulation, scene: Scene, setting: Setting) -> None:
     opts = dict(setting.options)
     if setting.family == "pfvi":
         # dt: the cap on adaptive steps; the controller starts from it.
+        # The seed's fittings with the seed's frequency and centre (unless the
+        # setting names them); "none" and "exact" with pfvi's defaults.
+        fitting = opts.get("fitting", "phase")
+        seed = fitting in ("phase", "phase-literal")
         configure_integrator(sim, "pfvi", dt=scene.period / 10.0, stages=int(opts.get("stages", 4)),
-                             fitting=opts.get("fitting", "phase"), centre=opts.get("centre", SEED_MODEL["centre"]),
-                             step_control=opts.get("step_control", "reversible"), epsilon=setting.value)
-        scene.configure_pfvi(sim, opts.get("frequency", "curvature"))
+                             fitting=fitting, step_control=opts.get("step_control", "reversible"),
+                             epsilon=setting.value, **({"centre": SEED_MODEL["centre"]} if seed else {}))
+        frequency = opts.get("frequency", SEED_MODEL["frequency"] if seed else None)
+        if frequency is not None:
+            scene.configure_pfvi(sim, frequency)
     elif setting.family == "ias15":
         configure_integrator(sim, "ias15", dt=scene.period / 100.0, epsilon=setting.value)  # dt: the first trial
     elif setting.family == "bs":
