@@ -7,6 +7,16 @@
     python -P benchmarks/adaptive.py order
     python -P benchmarks/adaptive.py local [--u 0.05]
     python -P benchmarks/adaptive.py defaults [--orbits 1000]
+    python -P benchmarks/adaptive.py symmetric [--long 100000]
+
+`symmetric`: the symmetric step control (the default) on m = 1e-3 about
+m = 1 in the COM frame: steps per orbit against epsilon for s = 2, 4, 6 at
+e = 0.95 (slope against the predicted 1/(2s - 2)); the largest relative
+position error per orbit over 5 orbits against epsilon for e = 0 ... 0.99;
+the largest energy error in the first and last tenth over 2000 orbits at
+e = 0.95 (sampled 10 times per orbit) and over --long periods of the seed's
+problem at e = 0.95 (Figure 2's run at the default settings, sampled once per
+period); forward and back over 10 orbits at e = 0.9.
 
 Two bodies, a = 1, G = 1, from pericentre: the seed's problem (a massless body
 about a unit mass at rest) or m = 1e-3 about m = 1 in the COM frame.
@@ -229,6 +239,80 @@ def local(u):
               f" {omega**2 * r / a:.3f} |")
 
 
+def symmetric(long_periods):
+    from rebound_pfvi.scenes import Kepler
+
+    def kepler(e, s, epsilon, orbits):
+        scene = Kepler(e=e, periods=orbits)
+        sim = scene.build()
+        configure_integrator(sim, "pfvi", dt=scene.period / 10, stages=s, epsilon=epsilon)
+        return scene, sim
+
+    print("Steps per orbit, e = 0.95 (2 orbits), and their slope against 1/(2s - 2):\n")
+    epsilons = [10.0**-k for k in range(4, 13, 2)]
+    print("| s | " + " | ".join(f"{x:.0e}" for x in epsilons) + " | slope | predicted |")
+    print("|---|" + "---|" * (len(epsilons) + 2))
+    for s in (2, 4, 6):
+        counts = []
+        for x in epsilons:
+            scene, sim = kepler(0.95, s, x, 2)
+            if s == 2 and x < 1e-8:
+                counts.append(None)
+                continue
+            sim.integrate(scene.t_end, exact_finish_time=0)
+            counts.append(sim.integrator.n_steps / 2)
+        known = [(x, n) for x, n in zip(epsilons, counts) if n]
+        slope = math.log(known[-1][1] / known[0][1]) / math.log(known[0][0] / known[-1][0])
+        print(f"| {s} | " + " | ".join(f"{n:.0f}" if n else "-" for n in counts)
+              + f" | {slope:.3f} | {1 / (2 * s - 2):.3f} |")
+    print("\nLargest relative position error per orbit over 5 orbits, in units of epsilon:\n")
+    eccentricities = (0.0, 0.3, 0.5, 0.7, 0.9, 0.95, 0.99)
+    print("| s | epsilon | " + " | ".join(f"e = {e:g}" for e in eccentricities) + " |")
+    print("|---|---|" + "---|" * len(eccentricities))
+    for s, x in ((2, 1e-5), (3, 1e-7), (4, 1e-8), (5, 1e-9), (6, 1e-10)):
+        cells = []
+        for e in eccentricities:
+            scene, sim = kepler(e, s, x, 5)
+            reference = scene.reference()
+            worst = 0.0
+            for k in range(1, 21):
+                sim.integrate(k * scene.period / 4, exact_finish_time=0)
+                worst = max(worst, scene.position_error(sim, reference))
+            cells.append(f"{worst / scene.a / 5 / x:.2g}")
+        print(f"| {s} | {x:.0e} | " + " | ".join(cells) + " |")
+    print("\nLong-term energy at the default settings (symmetric steps, s = 6, epsilon 1e-6), e = 0.95:\n")
+    print("| run | steps/orbit | max energy error, first tenth | last tenth | last/first | seconds |")
+    print("|---|---|---|---|---|---|")
+    for label, frame, orbits, samples in (("m = 1e-3, COM frame, 2000 orbits", "com", 2000, 10),
+                                          (f"seed's problem, {long_periods} periods", "seed", long_periods, 1)):
+        sim = pair(0.95, frame)
+        sim.integrator = "pfvi"
+        period = sim.particles[1].P
+        sim.dt = period / 100
+        E0 = energy(sim)
+        errors = []
+        start = time.perf_counter()
+        for k in range(1, orbits * samples + 1):
+            sim.integrate(k * period / samples, exact_finish_time=0)
+            errors.append(abs(energy(sim) / E0 - 1))
+        tenth = len(errors) // 10
+        first, last = max(errors[:tenth]), max(errors[-tenth:])
+        print(f"| {label} | {sim.integrator.n_steps / orbits:.0f} | {first:.2e} | {last:.2e} | {last / first:.2f} |"
+              f" {time.perf_counter() - start:.0f} |")
+    print("\nForward 10 orbits at e = 0.9, then as many steps back: largest difference from the start:\n")
+    print("| s | epsilon | steps | difference |")
+    print("|---|---|---|---|")
+    for s, x in ((4, 1e-8), (6, 1e-10)):
+        scene, sim = kepler(0.9, s, x, 10)
+        start_state = [(p.x, p.y, p.vx, p.vy) for p in sim.particles]
+        sim.integrate(scene.t_end, exact_finish_time=0)
+        n = sim.integrator.n_steps
+        sim.dt = -sim.dt
+        sim.steps(n)
+        diff = max(abs(a - b) for p, q in zip(sim.particles, start_state) for a, b in zip((p.x, p.y, p.vx, p.vy), q))
+        print(f"| {s} | {x:.0e} | {n} | {diff:.1e} |")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -253,6 +337,8 @@ def main(argv=None):
     sub.add_parser("order")
     p = sub.add_parser("defaults")
     p.add_argument("--orbits", type=int, default=1000)
+    p = sub.add_parser("symmetric")
+    p.add_argument("--long", type=int, default=100000)
     args = parser.parse_args(argv)
     if args.command == "longterm":
         longterm(args.e, args.orbits, args.epsilon, args.stages, args.frame)
@@ -266,6 +352,8 @@ def main(argv=None):
         retrace(args.e, args.steps, args.epsilon)
     elif args.command == "order":
         order()
+    elif args.command == "symmetric":
+        symmetric(args.long)
     else:
         defaults(args.orbits)
 

@@ -106,7 +106,8 @@ def summary_table(rows: List[Run], floor: float = 0.0, length: str = "AU") -> st
 #: How each family gets to its accuracy: the reason behind its cost per unit of accuracy.
 HOW = {
     "pfvi": "pfvi is implicit: each step solves its stage equations by iteration (several force evaluations per "
-            "stage), with adaptive steps from osculating circles; it is of order 2s - 2 (s = 2: 2, s = 4: 6, "
+            "stage), with adaptive steps from a time-symmetric step density (the default, one solve per "
+            "step; lines marked symmetric) or from osculating circles (the others); it is of order 2s - 2 (s = 2: 2, s = 4: 6, "
             "s = 6: 10)",
     "ias15": "IAS15 is a 15th-order adaptive predictor-corrector: long steps, each of several force evaluations",
     "bs": "BS (Gragg-Bulirsch-Stoer) extrapolates to high order with adaptive steps",
