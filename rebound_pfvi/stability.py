@@ -38,6 +38,8 @@ if TYPE_CHECKING:
 
 Vector = Tuple[float, float, float]
 
+#: pfvi's default number of stages: its row is added to every report.
+DEFAULT_STAGES = 6
 FITTINGS = ("phase", "phase-literal", "none")
 STAGES = (2, 4)
 CHECKPOINTS = 100
@@ -370,6 +372,8 @@ def default_configs(integrators: Sequence[str] = ("pfvi", "ias15", "whfast"), fi
     for family in integrators:
         if family == "pfvi":
             configs += [Config("pfvi", f, s, epsilon) for s in stages for f in fittings]
+            if DEFAULT_STAGES not in stages and "none" in fittings:
+                configs.append(Config("pfvi", "none", DEFAULT_STAGES, epsilon))  # pfvi's defaults
         elif family == "ias15":
             configs.append(Config("ias15", epsilon=ias15_epsilon))
         elif family == "whfast":

@@ -100,7 +100,7 @@ def test_cli_writes_the_report(tmp_path):
     assert done.returncode == 0, done.stderr
     data = json.loads((tmp_path / "out" / "stability.json").read_text())
     rows = {(r["case"], r["integrator"]): r for r in data["rows"]}
-    assert len(rows) == 2 * 7
+    assert len(rows) == 2 * 8  # 6 seed-fitting rows, the default (s = 6 "none"), IAS15
     assert all(r["status"] == "finished" for r in rows.values())
     # Measured with the default (symmetric) step control: IAS15 7.8e-15 AU;
     # pfvi s = 4 9.9e-15 AU, s = 2 1.6e-12 AU (its density follows the fall;
@@ -141,12 +141,13 @@ def test_cli_progress_bar_and_failed_runs_in_full_at_the_end(tmp_path):
                cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     # A tqdm bar: runs done of the total, elapsed and time left; it names runs, never their messages.
-    assert "6/6 [" in done.stderr and "<00:00" in done.stderr
+    assert "7/7 [" in done.stderr and "<00:00" in done.stderr
     assert "did not converge" not in done.stderr
     refusals = [line for line in done.stdout.splitlines() if line.startswith("- fixed-u-40x: pfvi ")]
-    assert len(refusals) == 3, done.stdout
+    assert len(refusals) == 4, done.stdout  # s = 4 with each fitting, and the default s = 6
     for line in refusals:  # the whole message, to its last word
-        assert " s=4: refused: pfvi: the 4-stage solve did not converge" in line
+        assert (" s=4: refused: pfvi: the 4-stage solve did not converge" in line
+                or " s=6: refused: pfvi: the 6-stage solve did not converge" in line), line
         assert line.endswith("step not taken, state restored. Lower dt."), line
 
 
