@@ -285,6 +285,23 @@ static double symmetric_gamma(const struct pfvi_options* o){
 // shortening the last step to finish on time, or the user), it caps the
 // step, and a capped step ends the track: rho starts afresh from sigma at
 // the next step, since it no longer belongs to the state it arrives at.
+// rho for a step in direction `sign` from a state of density sigma and rate
+// g, after a last step taken with rho_last in direction sign_last (rho_last
+// = 0: none): the track continued, a reversal retracing that step, or a
+// fresh start from sigma. The step's start and the proposal at the end of
+// the last step both use it, so that they agree.
+static double symmetric_rho(double rho_last, double sign_last, double sign, double kappa, double sigma, double g){
+    double rho = 0.;
+    if (rho_last > 0.){
+        rho = (sign_last == sign) ? rho_last + sign*kappa*g : rho_last;
+    }
+    if (!(rho > 0.) || !isfinite(rho)){
+        rho = sigma + 0.5*sign*kappa*g;
+        rho = (rho > 0.) ? rho : sigma;
+    }
+    return rho;
+}
+
 static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
     const double sign = copysign(1., r->dt);
     const int proposed = (st->rho > 0. && fabs(r->dt) == fabs(st->dt_proposed));
@@ -293,21 +310,8 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     double sigma, g;
     const double gamma = symmetric_gamma(&st->options);
     const int paired = pfvi_density(st->start, st->end, st->centre, N, gamma, &sigma, &g);
-    double rho = 0., h = fabs(r->dt);  // without pairs: sim.dt
-    if (paired){
-        if (st->rho > 0. && st->rho_sign == sign){
-            rho = st->rho + sign*kappa*g;
-        }else if (st->rho > 0. && st->rho_sign == -sign){
-            rho = st->rho;  // reversing: the last step's density, read backward
-        }
-        if (!(rho > 0.) || !isfinite(rho)){
-            // First step, edited particles, or the track lost: start from sigma.
-            rho = sigma + 0.5*sign*kappa*g;
-            rho = (rho > 0.) ? rho : sigma;
-        }
-        h = fmin(kappa/rho, cap);
-    }
-    const int capped = paired && h < kappa/rho;
+    const double rho = paired ? symmetric_rho(st->rho, st->rho_sign, sign, kappa, sigma, g) : 0.;
+    double h = paired ? fmin(kappa/rho, cap) : fabs(r->dt);  // without pairs: sim.dt
     for (;;){
         const enum pfvi_trial trial = pfvi_trial_step(r, st, N, t0, sign*h);
         if (trial == PFVI_TRIAL_ERROR){
@@ -328,15 +332,15 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     h *= sign;
     pfvi_commit_step(r, st, N, h);
     st->statistics.error_estimate = 0.;
-    st->rho = (paired && !capped && fabs(h) == kappa/rho) ? rho : 0.;
+    // A step shorter than kappa/rho (capped or halved) ends the track.
+    st->rho = (paired && fabs(h) == kappa/rho) ? rho : 0.;
     st->rho_sign = sign;
     if (paired){
         // Propose exactly the next step, so that REBOUND shortens it only to
         // finish on time; the next step's start recomputes it the same way.
         double sigma1, g1;
         pfvi_density(r->particles, NULL, st->centre, N, gamma, &sigma1, &g1);
-        const double rho_next = (st->rho > 0.) ? rho + sign*kappa*g1 : sigma1 + 0.5*sign*kappa*g1;
-        r->dt = sign*kappa/((rho_next > 0.) ? rho_next : sigma1);
+        r->dt = sign*kappa/symmetric_rho(st->rho, sign, sign, kappa, sigma1, g1);
         st->dt_proposed = r->dt;
     }
     return h;
