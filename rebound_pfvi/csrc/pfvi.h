@@ -100,6 +100,9 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // decreases, and has converged if that change is at most the tolerance.
 #define PFVI_ITERATION_MAX 50
 #define PFVI_ITERATION_TOLERANCE 1e-12
+// A change at most this (relative, below the doubles' spacing) ends the
+// iteration at once, converged.
+#define PFVI_ITERATION_ROUNDOFF 3e-17
 // Step control. Standard controller: next h = h * SAFETY * (epsilon/error)^(1/ORDER),
 // the factor kept within [SHRINK_MIN, GROW_MAX]; ORDER is the measured order
 // in h of the osculating-circle estimate (docs/adaptive.md).
@@ -186,6 +189,10 @@ struct pfvi_stage_fit {
     double q0_row[PFVI_STAGES_MAX-1]; // coefficient of q_k in each equation
     double lu[PFVI_STAGES_MAX-1][PFVI_STAGES_MAX-1];
     int pivot[PFVI_STAGES_MAX-1];
+    // The matrix's inverse applied to the force weights: unknown l changes by
+    // -solve[l][k] per unit of the force carried at stage k. Zero beyond s
+    // stages and s - 1 unknowns, so that a round loops over fixed bounds.
+    double solve[PFVI_STAGES_MAX-1][PFVI_STAGES_MAX];
 };
 
 // |u| = |omega h| above u_max is limited to u_max (omega reduced to match);
@@ -199,6 +206,8 @@ PFVI_INTERNAL void pfvi_stage_fit_at(const struct pfvi_lobatto* rule, double u, 
         struct pfvi_stage_fit* fit, double* det);
 PFVI_INTERNAL enum pfvi_fit_status pfvi_stage_fit(const struct pfvi_lobatto* rule, double omega, double h,
         double u_max, int fitting, struct pfvi_stage_fit* fit);
+// Solves the fit's factorised m x m system in place (b: m values).
+PFVI_INTERNAL void pfvi_stage_solve(const struct pfvi_stage_fit* fit, int m, double* b);
 // The s-point rule with its det_classical: what pfvi_stage_fit needs.
 PFVI_INTERNAL int pfvi_stage_rule(int s, struct pfvi_lobatto* rule);
 // Inspection from Python (tests, docs): the seed's printed coefficients, gamma,
@@ -249,6 +258,18 @@ PFVI_INTERNAL double pfvi_osculating_error(const double x0[3], const struct pfvi
         const double x1[3], const struct pfvi_osculating* c1, double* noise);
 
 /* ----------------------------------------------------------------- state */
+
+// One particle's part of the stage equations that a step's rounds share:
+// its start, the unknowns at zero force, and the parts of the stage points
+// that do not depend on the unknowns.
+struct pfvi_stage_start {
+    double q0[3];
+    double d0[3];                        // q0 - centre
+    double yc[PFVI_STAGES_MAX-1][3];     // L^-1 g: the unknowns if no force acted (zero beyond s - 1)
+    double base[PFVI_STAGES_MAX][3];     // beta_m^k d0 (interior k)
+    double shift[PFVI_STAGES_MAX][3];    // the centre's displacement c^k h after the start
+};
+
 
 struct pfvi_options {
     int fitting;
@@ -451,6 +472,8 @@ struct pfvi_state {
     double (*predictor_x)[PFVI_STAGES_MAX][3];
     double (*unknowns)[PFVI_STAGES_MAX-1][3];
     double (*unknowns_next)[PFVI_STAGES_MAX-1][3];
+    // What each round of a step reuses, per particle (pfvi_stages.c).
+    struct pfvi_stage_start* stage_start;
     // The last step's stage accelerations seed the next solve if it starts
     // where that step ended (same s, N and t). Saved in archives with
     // predictor_a, so that a continued run is bit-identical.

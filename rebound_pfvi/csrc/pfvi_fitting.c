@@ -270,6 +270,40 @@ void pfvi_stage_fit_at(const struct pfvi_lobatto* rule, double u, int fitting, s
         fit->q0_row[e] = q0;
     }
     stage_matrix_factor(m, fit, det);
+    // solve = L^-1 P, P the weights of the force at stage k in each
+    // equation: w_k b^k in row 0 (the momentum), w_j at node j in row j.
+    memset(fit->solve, 0, sizeof(fit->solve));
+    if (*det != 0.){
+        for (int k=0; k<s; k++){
+            double column[PFVI_STAGES_MAX-1];
+            for (int e=0; e<m; e++){
+                column[e] = (e == 0) ? rule->w[k]*fit->b[k] : (e == k ? rule->w[k] : 0.);
+            }
+            pfvi_stage_solve(fit, m, column);
+            for (int e=0; e<m; e++){
+                fit->solve[e][k] = column[e];
+            }
+        }
+    }
+}
+
+void pfvi_stage_solve(const struct pfvi_stage_fit* fit, int m, double* b){
+    for (int k=0; k<m; k++){
+        const int p = fit->pivot[k];
+        if (p != k){
+            const double tmp = b[k]; b[k] = b[p]; b[p] = tmp;
+        }
+        for (int i=k+1; i<m; i++){
+            b[i] -= fit->lu[i][k]*b[k];
+        }
+    }
+    for (int k=m-1; k>=0; k--){
+        double sum = b[k];
+        for (int j=k+1; j<m; j++){
+            sum -= fit->lu[k][j]*b[j];
+        }
+        b[k] = sum/fit->lu[k][k];
+    }
 }
 
 int pfvi_stage_rule(int s, struct pfvi_lobatto* rule){

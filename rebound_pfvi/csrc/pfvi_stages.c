@@ -26,95 +26,96 @@
 #include <math.h>
 #include "pfvi.h"
 
-// Solves the linear part for one particle: unknowns y[e][component] from the
-// stage accelerations sa[k][component].
-// h^2 times the force the iteration carries at stage k, component c: the
-// acceleration sa, or for "exact" (u2 > 0) the residual a + omega^2 d at
-// the point sx where it was evaluated.
-static inline double stage_force_h2(const struct pfvi_lobatto* rule, const struct pfvi_stage_fit* f,
+// The part of the stage equations a step's rounds share (per particle): the
+// unknowns for zero force, L^-1 g with g the start momentum and position
+// terms, and the stage points' parts that do not depend on the unknowns.
+static void stage_start_of(const struct pfvi_lobatto* rule, const struct pfvi_stage_fit* f,
+        const struct reb_particle* p0, const struct pfvi_centre* centre, double h, struct pfvi_stage_start* ss){
+    const int s = rule->s, m = s - 1;
+    const double q0[3] = {p0->x, p0->y, p0->z};
+    const double v0[3] = {p0->vx - centre->v[0], p0->vy - centre->v[1], p0->vz - centre->v[2]};
+    for (int c=0; c<3; c++){
+        ss->q0[c] = q0[c];
+        ss->d0[c] = q0[c] - centre->x[c];
+        double g[PFVI_STAGES_MAX-1];
+        g[0] = -f->G*h*v0[c] - f->q0_row[0]*ss->d0[c];
+        for (int j=1; j<m; j++){
+            g[j] = -f->q0_row[j]*ss->d0[c];
+        }
+        pfvi_stage_solve(f, m, g);
+        for (int l=0; l<PFVI_STAGES_MAX-1; l++){
+            ss->yc[l][c] = (l < m) ? g[l] : 0.;
+        }
+        for (int k=0; k<PFVI_STAGES_MAX; k++){
+            ss->base[k][c] = (k < s) ? f->beta_m[k]*ss->d0[c] : 0.;
+            ss->shift[k][c] = (k < s) ? pfvi_centre_shift(centre, rule->c[k]*h, c) : 0.;
+        }
+    }
+}
+
+// One round for one particle: the unknowns y for the forces the iteration
+// carries, h^2 (a^k - ac) at the stage accelerations sa, and for "exact"
+// (u2 > 0) plus u^2 d^k at the points sx where they were evaluated (the
+// residual of the harmonic part the matrix holds): y = yc - solve F. Loops
+// run over the fixed bounds of the padded tables.
+static void stage_round(const struct pfvi_stage_fit* f, const struct pfvi_stage_start* ss,
+        const struct pfvi_centre* centre, int s, double h, const double (*sa)[3], const double (*sx)[3],
+        double (*y)[3]){
+    const double h2 = h*h;
+    double F[PFVI_STAGES_MAX][3];
+    for (int k=0; k<PFVI_STAGES_MAX; k++){
+        for (int c=0; c<3; c++){
+            if (k >= s){
+                F[k][c] = 0.;
+            }else if (f->u2 == 0.){
+                F[k][c] = h2*(sa[k][c] - centre->acc[c]);
+            }else{
+                F[k][c] = h2*(sa[k][c] - centre->acc[c]) + f->u2*((sx[k][c] - centre->x[c]) - ss->shift[k][c]);
+            }
+        }
+    }
+    for (int l=0; l<PFVI_STAGES_MAX-1; l++){
+        double sum[3] = {0., 0., 0.};
+        for (int k=0; k<PFVI_STAGES_MAX; k++){
+            for (int c=0; c<3; c++){
+                sum[c] += f->solve[l][k]*F[k][c];
+            }
+        }
+        for (int c=0; c<3; c++){
+            y[l][c] = ss->yc[l][c] - sum[c];
+        }
+    }
+}
+
+// h^2 times the force the iteration carries at stage k, component c (as
+// stage_round), for the momentum at the step's end.
+static inline double stage_force_h2(const struct pfvi_stage_fit* f, const struct pfvi_stage_start* ss,
         const struct pfvi_centre* centre, double h, const double (*sa)[3], const double (*sx)[3], int k, int c){
     const double h2a = h*h*(sa[k][c] - centre->acc[c]);
     if (f->u2 == 0.){
         return h2a;
     }
-    const double d = (sx[k][c] - centre->x[c]) - pfvi_centre_shift(centre, rule->c[k]*h, c);
-    return h2a + f->u2*d;
-}
-
-static void stage_solve_linear(const struct pfvi_lobatto* rule, const struct pfvi_stage_fit* f,
-        const struct reb_particle* p0, const struct pfvi_centre* centre, double h, const double (*sa)[3],
-        const double (*sx)[3], double (*y)[3]){
-    const int s = rule->s, m = s - 1;
-    const double q0[3] = {p0->x - centre->x[0], p0->y - centre->x[1], p0->z - centre->x[2]};
-    const double v0[3] = {p0->vx - centre->v[0], p0->vy - centre->v[1], p0->vz - centre->v[2]};
-    const double h2 = h*h;
-    for (int c=0; c<3; c++){
-        double force = 0.;
-        if (f->u2 == 0.){
-            for (int k=0; k<s; k++){
-                force += rule->w[k]*f->b[k]*(sa[k][c] - centre->acc[c]);
-            }
-            y[0][c] = -f->G*h*v0[c] - h2*force - f->q0_row[0]*q0[c];
-            for (int j=1; j<m; j++){
-                y[j][c] = -h2*rule->w[j]*(sa[j][c] - centre->acc[c]) - f->q0_row[j]*q0[c];
-            }
-        }else{
-            for (int k=0; k<s; k++){
-                force += rule->w[k]*f->b[k]*stage_force_h2(rule, f, centre, h, sa, sx, k, c);
-            }
-            y[0][c] = -f->G*h*v0[c] - force - f->q0_row[0]*q0[c];
-            for (int j=1; j<m; j++){
-                y[j][c] = -rule->w[j]*stage_force_h2(rule, f, centre, h, sa, sx, j, c) - f->q0_row[j]*q0[c];
-            }
-        }
-    }
-    // Forward and back substitution with the stored LU factors and pivots.
-    for (int k=0; k<m; k++){
-        const int p = f->pivot[k];
-        if (p != k){
-            for (int c=0; c<3; c++){
-                const double tmp = y[k][c]; y[k][c] = y[p][c]; y[p][c] = tmp;
-            }
-        }
-        for (int i=k+1; i<m; i++){
-            for (int c=0; c<3; c++){
-                y[i][c] -= f->lu[i][k]*y[k][c];
-            }
-        }
-    }
-    for (int k=m-1; k>=0; k--){
-        for (int c=0; c<3; c++){
-            double sum = y[k][c];
-            for (int j=k+1; j<m; j++){
-                sum -= f->lu[k][j]*y[j][c];
-            }
-            y[k][c] = sum/f->lu[k][k];
-        }
-    }
+    return h2a + f->u2*((sx[k][c] - centre->x[c]) - ss->shift[k][c]);
 }
 
 // The step's position increment q_k+1 - q_k of one component: the change
 // of d = q - c and the centre's drift.
-static inline double stage_increment(const struct pfvi_centre* centre, const double (*y)[3], double h, int c){
-    return y[0][c] + pfvi_centre_shift(centre, h, c);
+static inline double stage_increment(const struct pfvi_stage_start* ss, const double (*y)[3], int s, int c){
+    return y[0][c] + ss->shift[s-1][c];
 }
 
-// Stage point k of one particle: q_k + (c^k h vc + beta_m d_k + bbar (d_k+1 - d_k)
-// + delta q^k). The last stage is q_k + (increment + carried low-order part),
-// exactly the position the step will end on.
-static void stage_position(const struct pfvi_lobatto* rule, const struct pfvi_stage_fit* f,
-        const struct reb_particle* p0, const struct pfvi_centre* centre, const struct pfvi_compensation* comp,
-        const double (*y)[3], double h, int k, double x[3]){
-    const double q0[3] = {p0->x, p0->y, p0->z};
-    const int s = rule->s;
+// Stage point k of one particle: q_k + (beta_m d_k + bbar (d_k+1 - d_k)
+// + delta q^k + the centre's drift). The last stage is q_k + (increment +
+// carried low-order part), exactly the position the step will end on.
+static inline void stage_position(const struct pfvi_stage_fit* f, const struct pfvi_stage_start* ss,
+        const struct pfvi_compensation* comp, const double (*y)[3], int s, int k, double x[3]){
     for (int c=0; c<3; c++){
         if (k == 0){
-            x[c] = q0[c];
+            x[c] = ss->q0[c];
         }else if (k == s - 1){
-            x[c] = q0[c] + (stage_increment(centre, y, h, c) + comp->x[c]);
+            x[c] = ss->q0[c] + (stage_increment(ss, y, s, c) + comp->x[c]);
         }else{
-            const double d0 = q0[c] - centre->x[c];
-            x[c] = q0[c] + ((f->beta_m[k]*d0 + f->bbar[k]*y[0][c] + y[k][c]) + pfvi_centre_shift(centre, rule->c[k]*h, c));
+            x[c] = ss->q0[c] + ((ss->base[k][c] + f->bbar[k]*y[0][c] + y[k][c]) + ss->shift[k][c]);
         }
     }
 }
@@ -145,7 +146,8 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
         for (size_t i=0; i<N; i++){
             double x[3];
             const struct pfvi_centre* const centre = &st->centre[i];
-            stage_position(rule, &st->stage_fit[i], &st->start[i], centre, &st->compensation[i], st->unknowns[i], h, k, x);
+            stage_position(&st->stage_fit[i], &st->stage_start[i], &st->compensation[i],
+                    (const double (*)[3])st->unknowns[i], s, k, x);
             ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
             if (vdep){
                 double qd[3];
@@ -234,6 +236,7 @@ static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
     }
 }
 
+
 static int stages_prepare(struct pfvi_state* st, double h){
     if (st->rule.s != st->options.stages){
         // First step, or stages changed (the predictor checks its own s).
@@ -262,10 +265,13 @@ static double stages_fitted_omega(const struct pfvi_state* st, size_t i){
 
 static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){
     const struct pfvi_lobatto* const rule = &st->rule;
-    const int s = rule->s, m = s - 1;
+    const int s = rule->s;
     struct reb_particle* const ps = r->particles;
     struct reb_particle* const p0 = st->start;
 
+    for (size_t i=0; i<N; i++){
+        stage_start_of(rule, &st->stage_fit[i], &p0[i], &st->centre[i], h, &st->stage_start[i]);
+    }
     stage_predict(st, N, t0, h);
 
     // Fixed-point iteration; `unknowns` is the iterate at which the forces
@@ -273,30 +279,32 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
     double previous = INFINITY, change = INFINITY;
     int rounds = 0, converged = 0;
     for (int iteration=0; iteration<=PFVI_ITERATION_MAX; iteration++){
-        change = 0.;
         for (size_t i=0; i<N; i++){
-            stage_solve_linear(rule, &st->stage_fit[i], &p0[i], &st->centre[i], h, (const double (*)[3])st->stage_a[i],
-                    (const double (*)[3])st->stage_x[i], st->unknowns_next[i]);
-            if (iteration == 0){
-                continue;
-            }
-            const double (*y)[3] = st->unknowns[i];
-            const double (*yn)[3] = st->unknowns_next[i];
-            double scale = fmax(fabs(p0[i].x), fmax(fabs(p0[i].y), fabs(p0[i].z)));
-            double diff = 0.;
-            for (int j=0; j<m; j++){
-                for (int c=0; c<3; c++){
-                    diff = fmax(diff, fabs(yn[j][c] - y[j][c]));
-                }
-            }
-            for (int c=0; c<3; c++){
-                scale = fmax(scale, fabs(y[0][c]));
-            }
-            // Written so that a NaN makes the change NaN, not 0.
-            const double relative = (scale > 0.) ? diff/scale : diff;
-            change = (relative > change || relative != relative) ? relative : change;
+            stage_round(&st->stage_fit[i], &st->stage_start[i], &st->centre[i], s, h,
+                    (const double (*)[3])st->stage_a[i], (const double (*)[3])st->stage_x[i], st->unknowns_next[i]);
         }
         if (iteration > 0){
+            change = 0.;
+            for (size_t i=0; i<N; i++){
+                const double (*y)[3] = st->unknowns[i];
+                const double (*yn)[3] = st->unknowns_next[i];
+                double scale = 0., diff = 0.;
+                for (int c=0; c<3; c++){
+                    const double q = fabs(st->stage_start[i].q0[c]), d = fabs(y[0][c]);
+                    scale = (q > scale) ? q : scale;
+                    scale = (d > scale) ? d : scale;
+                }
+                for (int j=0; j<PFVI_STAGES_MAX-1; j++){
+                    for (int c=0; c<3; c++){
+                        // (a NaN is kept: it makes the change NaN)
+                        const double d = fabs(yn[j][c] - y[j][c]);
+                        diff = (d > diff || d != d) ? d : diff;
+                    }
+                }
+                // Written so that a NaN makes the change NaN, not 0.
+                const double relative = (scale > 0.) ? diff/scale : diff;
+                change = (relative > change || relative != relative) ? relative : change;
+            }
             const enum pfvi_iteration verdict = pfvi_iteration_verdict(change, previous,
                     iteration == PFVI_ITERATION_MAX);
             if (verdict != PFVI_ITERATE){
@@ -346,7 +354,7 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
                     // residual where it was evaluated: as the solve used them.
                     const double d = (k == 0) ? d0[c] : (k == s - 1) ? d0[c] + y[0][c]
                         : (1. + f->beta_m[k])*d0[c] + f->bbar[k]*y[0][c] + y[k][c];
-                    const double h2a = stage_force_h2(rule, f, centre, h, (const double (*)[3])st->stage_a[i],
+                    const double h2a = stage_force_h2(f, &st->stage_start[i], centre, h, (const double (*)[3])st->stage_a[i],
                             (const double (*)[3])st->stage_x[i], k, c) - f->u2*d;
                     dv[c] += wk*(f->beta_d[k]*qd[c] + (1. + f->beta_m[k])*h2a);
                 }
@@ -354,7 +362,7 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
         }
         const double gh = f->G*h;
         double x[3];
-        stage_position(rule, f, &p0[i], &st->centre[i], comp, y, h, s - 1, x);
+        stage_position(f, &st->stage_start[i], comp, y, s, s - 1, x);
         ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
         // w_k+1 - w_k, and the centre's velocity change h ac.
         const double inc_v[3] = {(dv[0]/gh + h*centre->acc[0]) + comp->v[0], (dv[1]/gh + h*centre->acc[1]) + comp->v[1],
@@ -380,10 +388,11 @@ static void stages_commit(struct reb_simulation* r, struct pfvi_state* st, size_
     for (size_t i=0; i<N; i++){
         struct pfvi_compensation* const comp = &st->compensation[i];
         const double (*y)[3] = st->unknowns[i];
-        const struct pfvi_centre* const centre = &st->centre[i];
-        comp->x[0] = (stage_increment(centre, y, h, 0) + comp->x[0]) - (ps[i].x - p0[i].x);
-        comp->x[1] = (stage_increment(centre, y, h, 1) + comp->x[1]) - (ps[i].y - p0[i].y);
-        comp->x[2] = (stage_increment(centre, y, h, 2) + comp->x[2]) - (ps[i].z - p0[i].z);
+        const struct pfvi_stage_start* const ss = &st->stage_start[i];
+        const int s = st->rule.s;
+        comp->x[0] = (stage_increment(ss, y, s, 0) + comp->x[0]) - (ps[i].x - p0[i].x);
+        comp->x[1] = (stage_increment(ss, y, s, 1) + comp->x[1]) - (ps[i].y - p0[i].y);
+        comp->x[2] = (stage_increment(ss, y, s, 2) + comp->x[2]) - (ps[i].z - p0[i].z);
         comp->v[0] = st->dv[i].x - (ps[i].vx - p0[i].vx);
         comp->v[1] = st->dv[i].y - (ps[i].vy - p0[i].vy);
         comp->v[2] = st->dv[i].z - (ps[i].vz - p0[i].vz);
