@@ -130,6 +130,9 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 #define PFVI_SYMMETRIC_CONSTANTS {0., 0., 14., 0.32, 0.019, 8.3e-4, 4.4e-5}
 #define PFVI_SYMMETRIC_BETA {0., 0., 1.5, 2.2, 2.5, 3.0, 3.4}
 #define PFVI_KAPPA_MAX 1.0
+// A symmetric step at whose end the density sigma exceeds this many times the
+// one it was sized for (kappa/h) is retried at half the step.
+#define PFVI_DENSITY_JUMP_MAX 3.0
 
 /* ---------------------------------------------------- quadrature (lobatto) */
 
