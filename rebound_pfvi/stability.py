@@ -549,7 +549,7 @@ def what_happened(row: Run) -> str:
         if row.pfvi["n_rejected"]:
             parts.append(f"{row.pfvi['n_rejected']} trial steps rejected")
         if row.pfvi["n_asymmetric"]:
-            parts.append(f"{row.pfvi['n_asymmetric']} reversible steps not solved (asymmetric)")
+            parts.append(f"{row.pfvi['n_asymmetric']} steps not time-symmetric (n_asymmetric)")
     if row.status == "finished" and not row.finite:
         parts.append("NON-FINITE STATE")
     return "; ".join(parts)

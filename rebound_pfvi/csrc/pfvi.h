@@ -146,6 +146,7 @@ struct pfvi_lobatto {
     double c[PFVI_STAGES_MAX];
     double w[PFVI_STAGES_MAX];
     double a[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
+    double lagrange[PFVI_STAGES_MAX]; // barycentric weights 1/prod_(m != j) (c^j - c^m): l_j(t) = lagrange[j] prod_(m != j) (t - c^m)
     double det_classical;   // determinant of the stage matrix at u = 0 (singularity guard), set by pfvi_fitting.c
 };
 PFVI_INTERNAL int pfvi_lobatto_compute(int s, struct pfvi_lobatto* rule);
@@ -211,8 +212,9 @@ PFVI_INTERNAL enum pfvi_fit_status pfvi_stage_fit(const struct pfvi_lobatto* rul
         double u_max, int fitting, struct pfvi_stage_fit* fit);
 // Solves the fit's factorised m x m system in place (b: m values).
 PFVI_INTERNAL void pfvi_stage_solve(const struct pfvi_stage_fit* fit, int m, double* b);
-// The s-point rule with its det_classical: what pfvi_stage_fit needs.
-PFVI_INTERNAL int pfvi_stage_rule(int s, struct pfvi_lobatto* rule);
+// The s-point rule with its det_classical: what pfvi_stage_fit needs; and,
+// if classical is not NULL, the fit at u = 0 (every fitting's, whatever h).
+PFVI_INTERNAL int pfvi_stage_rule(int s, struct pfvi_lobatto* rule, struct pfvi_stage_fit* classical);
 // Inspection from Python (tests, docs): the seed's printed coefficients, gamma,
 // the two-point step's coefficients, the rule, and the stage coefficients.
 PFVI_API void pfvi_seed_coefficients(double u, double c, double out[4]);
@@ -465,6 +467,7 @@ struct pfvi_state {
     // a[i][k] of the step being tried, those of the last step taken (the
     // predictor's data), and the unknowns of the current and the next iterate.
     struct pfvi_lobatto rule;
+    struct pfvi_stage_fit stage_classical;  // the rule's fit at u = 0, copied where omega is 0 ("none")
     struct pfvi_stage_fit* stage_fit;
     double (*stage_a)[PFVI_STAGES_MAX][3];
     double (*predictor_a)[PFVI_STAGES_MAX][3];

@@ -306,12 +306,15 @@ void pfvi_stage_solve(const struct pfvi_stage_fit* fit, int m, double* b){
     }
 }
 
-int pfvi_stage_rule(int s, struct pfvi_lobatto* rule){
+int pfvi_stage_rule(int s, struct pfvi_lobatto* rule, struct pfvi_stage_fit* classical){
     if (!pfvi_lobatto_compute(s, rule)){
         return 0;
     }
-    struct pfvi_stage_fit classical;
-    pfvi_stage_fit_at(rule, 0., PFVI_FITTING_NONE, &classical, &rule->det_classical);
+    struct pfvi_stage_fit scratch;
+    pfvi_stage_fit_at(rule, 0., PFVI_FITTING_NONE, classical ? classical : &scratch, &rule->det_classical);
+    if (classical){
+        classical->omega = 0.;
+    }
     return 1;
 }
 
@@ -332,7 +335,7 @@ enum pfvi_fit_status pfvi_stage_fit(const struct pfvi_lobatto* rule, double omeg
 
 int pfvi_stage_coefficients(int s, double u, double* out){
     struct pfvi_lobatto rule;
-    if (!pfvi_stage_rule(s, &rule)){
+    if (!pfvi_stage_rule(s, &rule, NULL)){
         return 0;
     }
     struct pfvi_stage_fit fit;
@@ -351,7 +354,7 @@ int pfvi_stage_coefficients(int s, double u, double* out){
 
 int pfvi_stage_differentiation(int s, double u, int fitting, double* out){
     struct pfvi_lobatto rule;
-    if (!pfvi_stage_rule(s, &rule)){
+    if (!pfvi_stage_rule(s, &rule, NULL)){
         return 0;
     }
     struct pfvi_stage_fit fit;

@@ -40,11 +40,13 @@ const struct reb_integrator pfvi_integrator = {
     "to 6 Gauss-Lobatto nodes and interior corrections (K&V, 'Increasing the algebraic "
     "order'; Marsden & West 2001, section 2.6) the order is 2s - 2 and each step solves for the stage "
     "points by fixed-point iteration, stopped as in IRKGL16 (Antonana, Makazaga & "
-    "Murua 2017, J. Comput. Phys.); a solve that does not converge is refused. "
-    "Steps are adaptive by default (epsilon = " PFVI_STR(PFVI_EPSILON_DEFAULT) "): K&V's "
-    "osculating-circle bound on the position error ('Frequency Evaluation and Error Control') "
-    "sets them, time-symmetrically (step_control = "
-    "'reversible') or by accept/reject ('seed'); epsilon = 0 gives fixed steps of sim.dt. "
+    "Murua 2017, J. Comput. Phys.) or once the change is below " PFVI_STR(PFVI_ITERATION_ROUNDOFF) " "
+    "(relative); a solve that does not converge is retried shorter or refused. "
+    "Steps are adaptive by default (epsilon = " PFVI_STR(PFVI_EPSILON_DEFAULT) ", step_control = "
+    "'symmetric'): h = kappa/rho with rho tracking the pairs' frequencies time-symmetrically "
+    "(Hairer & Soderlind 2005), one stage solve per step, epsilon about the relative position "
+    "error per orbit; K&V's osculating-circle bound ('Frequency Evaluation and Error Control') "
+    "is kept as step_control = 'reversible' or 'seed'; epsilon = 0 gives fixed steps of sim.dt. "
     "Forward or backward. A step that cannot be taken "
     "(invalid option, non-finite particle or force, overflow, u at a pole) raises an error "
     "and leaves t and every particle bit-identical; if a force callback added or removed "
@@ -143,33 +145,40 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "the stage matrix is regular on (0, pi) except for s = 4 at u = 2.857; steps where its "
         "determinant falls below " PFVI_STR(PFVI_POLE_GUARD) " of its value at u = 0 are refused.",
         REB_DOUBLE, u_max),
-    PFVI_OPTION("Tolerance of the adaptive step control (K&V, 'Frequency Evaluation and Error "
-        "Control'): the bound "
-        "| |R1 - R2| - |O1 - O2| | on a step's position error from the osculating circles "
-        "(radius R, centre O) at its two ends, relative to the smaller radius, for the particle "
-        "where it is largest; on non-planar paths the centre's motion out of the circles' mean "
-        "plane (torsion, not error) is left out. The estimate is third order in dt whatever the "
-        "order of the scheme. A particle without circles at both ends on the same side "
-        "of its path (at rest, on a straight or radial path, or across an inflection) is left out of "
-        "that step's estimate; with no particle left the step is held, at most sim.dt (so on a "
-        "radial path the accuracy is sim.dt's). 0: fixed steps of sim.dt. Default "
-        PFVI_STR(PFVI_EPSILON_DEFAULT) ". The "
-        "step is also kept at u = omega*|dt| <= u_max. sim.dt is the first step tried and, "
-        "after each step, the next one proposed, as with IAS15.",
+    PFVI_OPTION("Tolerance of the adaptive step control; 0: fixed steps of sim.dt. Default "
+        PFVI_STR(PFVI_EPSILON_DEFAULT) ". With step_control = 'symmetric' (default) it is about "
+        "the relative position error per orbit of a bound pair, for eccentricities 0 to 0.999 (at "
+        "e = 0.5 ... 0.99 the measured error per orbit is 0.1 to 1 epsilon, less on rounder orbits; "
+        "beyond e = 0.999 the eccentricity factor is held and the error per orbit grows): steps are "
+        "kappa/rho with kappa = (epsilon/C_s)^(1/(2s - 2)), at most " PFVI_STR(PFVI_KAPPA_MAX) ", "
+        "and rho following sigma = (sum_i sigma_i^" PFVI_STR(PFVI_DENSITY_NORM) ")^(1/"
+        PFVI_STR(PFVI_DENSITY_NORM) "), sigma_i = sqrt(G (m_i + m_partner)/r^3) (1 - e_i^2)^(-gamma_s) "
+        "over the particles with a partner (rebound_pfvi's docs, adaptive steps). With 'reversible' and 'seed' it bounds "
+        "K&V's osculating-circle estimate | |R1 - R2| - |O1 - O2| | of a step's position error, "
+        "relative to the smaller radius, for the particle where it is largest: third order in dt "
+        "whatever the order of the scheme; a particle without comparable circles at both ends (at "
+        "rest, on a radial path, across an inflection) is left out, and with none left the step is "
+        "held at most sim.dt. Those two also keep u = omega*|dt| <= u_max.",
         REB_DOUBLE, epsilon),
-    { "Step selection when epsilon > 0. 'seed': a step is accepted if the estimate "
+    { "Step selection when epsilon > 0. 'symmetric' (default): h = kappa/rho, rho updated by "
+      "rho_n+1/2 = rho_n-1/2 + kappa d log(sigma)/dt (Hairer & Soderlind 2005, SIAM J. Sci. Comput. "
+      "26, 1838), which reads the same forward and backward: one stage solve per step, and a "
+      "round trip retraces the steps. sim.dt is the step proposed after each step; changed (by "
+      "REBOUND to finish on time, or by the user) it caps the next step, which restarts rho from "
+      "sigma. A step whose solve does not converge, or at whose end sigma exceeds "
+      PFVI_STR(PFVI_DENSITY_JUMP_MAX) " times kappa/h (a close approach within one step), is "
+      "retried at half the step (n_rejected; such steps are not time-symmetric: n_asymmetric). "
+      "Without pairs (gravity off, no massive body) the steps are sim.dt. "
+      "'seed' (K&V): a step is accepted if the osculating-circle estimate "
       "is at most epsilon, otherwise retried shorter (counted in n_rejected, nothing changed); "
       "the next step is h*" PFVI_STR(PFVI_CONTROL_SAFETY) "*(epsilon/estimate)^(1/"
       PFVI_STR(PFVI_CONTROL_ORDER) "), at most " PFVI_STR(PFVI_CONTROL_GROW_MAX) "x and at least "
       PFVI_STR(PFVI_CONTROL_SHRINK_MIN) "x larger; a step rejected " PFVI_STR(PFVI_CONTROL_MAX_REJECTIONS)
-      " times is refused. 'reversible' (default): each step solves estimate(start, end) = epsilon (or "
-      "u = u_max) for h, and "
-      "is fitted to the mean of the curvature frequencies at its two ends, so the step chosen "
-      "from either end is the same: time-symmetric, as in Hut, Makino & McMillan 1995 (ApJ 443, "
-      "L93). It costs about 3 to 5 trial steps per step (n_attempts). Near pericentre and "
-      "apocentre the estimate is not monotonic in h and the two directions may pick different "
-      "steps, so a round trip is not exact; energy errors stay bounded where 'seed' drifts. "
-      "Type: text. Default 'reversible'.",
+      " times is refused. 'reversible': each step solves estimate(start, end) = epsilon (or "
+      "u = u_max) for h, fitted to the mean of the curvature frequencies at its two ends, as in "
+      "Hut, Makino & McMillan 1995 (ApJ 443, L93); it costs about 3 to 5 trial steps per step "
+      "(n_attempts), and near pericentre and apocentre the two directions may pick different "
+      "steps. Type: text. Default 'symmetric'.",
       REB_INT, "step_control", offsetof(struct pfvi_state, options.step_control), 0, 0, pfvi_step_control_enum },
     { "", REB_POINTER, "compensation", offsetof(struct pfvi_state, compensation),
         offsetof(struct pfvi_state, N_compensation), sizeof(struct pfvi_compensation), 0 },
@@ -205,9 +214,10 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "solve did not converge and was retried shorter).", REB_UINT64, n_rejected),
     PFVI_STATISTIC("trial steps, taken or not (the work done: n_attempts / n_steps per step).",
         REB_UINT64, n_attempts),
-    PFVI_STATISTIC("'reversible' steps whose step equation was not solved in "
-        PFVI_STR(PFVI_REVERSIBLE_MAX_TRIALS) " trial "
-        "steps and that were taken at the largest step tried meeting epsilon (not time-symmetric).",
+    PFVI_STATISTIC("steps taken that are not time-symmetric: 'symmetric' steps retried shorter "
+        "(a solve that did not converge, or a close approach within the step), and 'reversible' "
+        "steps whose step equation was not solved in " PFVI_STR(PFVI_REVERSIBLE_MAX_TRIALS) " trial "
+        "steps and that were taken at the largest step tried meeting epsilon.",
         REB_UINT64, n_asymmetric),
     PFVI_STATISTIC("the step control's error estimate for the last step taken "
         "(0 with fixed steps).", REB_DOUBLE, error_estimate),

@@ -63,6 +63,9 @@ int pfvi_lobatto_compute(int s, struct pfvi_lobatto* rule){
             if (m != j) lambda[j] /= 0.5L*(x[j] - x[m]);
         }
     }
+    for (int j=0; j<=n; j++){
+        rule->lagrange[j] = (double)lambda[j];
+    }
     // Differentiation matrix from the barycentric weights; the diagonal makes
     // every row sum to zero (seed section 6, first condition).
     for (int k=0; k<=n; k++){

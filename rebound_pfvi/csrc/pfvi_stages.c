@@ -193,9 +193,9 @@ static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
         for (int j=0; j<s; j++){
             const double tau = (retry ? 0. : 1.) + rho*rule->c[j];
             for (int m=0; m<s; m++){
-                double l = 1.;
+                double l = rule->lagrange[m];
                 for (int n=0; n<s; n++){
-                    if (n != m) l *= (tau - rule->c[n])/(rule->c[m] - rule->c[n]);
+                    if (n != m) l *= tau - rule->c[n];
                 }
                 x[j][m] = l;
             }
@@ -240,7 +240,7 @@ static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
 static int stages_prepare(struct pfvi_state* st, double h){
     if (st->rule.s != st->options.stages){
         // First step, or stages changed (the predictor checks its own s).
-        pfvi_stage_rule(st->options.stages, &st->rule);
+        pfvi_stage_rule(st->options.stages, &st->rule, &st->stage_classical);
     }
     if (!(h*h >= DBL_MIN)){
         // The stage equations carry h^2 a: below |h| ~ 1.5e-154 it underflows
@@ -252,6 +252,11 @@ static int stages_prepare(struct pfvi_state* st, double h){
 }
 
 static enum pfvi_fit_status stages_fit(struct pfvi_state* st, size_t i, double omega, double h){
+    if (omega == 0.){
+        // u = 0: the classical coefficients, the same at every step.
+        st->stage_fit[i] = st->stage_classical;
+        return PFVI_FIT_OK;
+    }
     return pfvi_stage_fit(&st->rule, omega, h, st->options.u_max, st->options.fitting, &st->stage_fit[i]);
 }
 
