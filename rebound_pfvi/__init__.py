@@ -43,8 +43,14 @@ FREQUENCIES = _option_values("frequency")
 CENTRES = _option_values("centre")
 #: Values of the ``step_control`` field, in the order of the C enum.
 STEP_CONTROLS = _option_values("step_control")
-#: Allowed values of the ``stages`` field.
-STAGES = (2, 3, 4, 5, 6)
+def _stages():
+    low, high = _ctypes.c_int(), _ctypes.c_int()
+    _lib.pfvi_stages_range(_ctypes.byref(low), _ctypes.byref(high))
+    return tuple(range(low.value, high.value + 1))
+
+
+#: Allowed values of the ``stages`` field, from the C core.
+STAGES = _stages()
 
 
 def _show_options_and_statistics():

@@ -189,8 +189,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="fig1: steps against energy error, phase vs none; fig2: energy and position error "
                             "over 1e5 periods at e = 0.95; fig3: the curvature frequency over 10 periods")
     paper.add_argument("--output", default="docs/paper", help="folder for the page, data and PNG (default docs/paper)")
-    paper.add_argument("--stages", type=int, default=None, choices=range(2, 7), metavar="{2..6}",
-                       help="Gauss-Lobatto nodes (default: 2 for fig1, as in the seed; 4 for fig2 and fig3)")
+    paper.add_argument("--stages", type=int, default=None,
+                       help="Gauss-Lobatto nodes, one of rebound_pfvi.STAGES (default: 2 for fig1, as in the seed; "
+                            "4 for fig2 and fig3)")
     paper.add_argument("--step-control", default=None, choices=("seed", "reversible"),
                        help="default: seed for fig1, reversible for fig2 and fig3")
     paper.add_argument("--epsilon", type=_positive_float, default=1e-6, help="fig2/fig3 tolerance (default 1e-6)")
@@ -308,7 +309,11 @@ def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv:
 
 
 def run_paper(args: argparse.Namespace, argv: List[str]) -> int:
+    from . import STAGES
     from . import paper as seed_paper
+
+    if args.stages is not None and args.stages not in STAGES:
+        args.subparser.error(f"argument --stages: {args.stages} is not one of {', '.join(map(str, STAGES))}")
 
     if args.figure == "fig1":
         stages, control = args.stages or 2, args.step_control or "seed"

@@ -38,6 +38,8 @@ lib.pfvi_option_value_name.restype = ctypes.c_char_p
 lib.pfvi_option_value_name.argtypes = [ctypes.c_char_p, ctypes.c_int]
 lib.pfvi_stage_differentiation.restype = ctypes.c_int
 lib.pfvi_stage_differentiation.argtypes = [ctypes.c_int, ctypes.c_double, ctypes.c_int, ctypes.POINTER(ctypes.c_double)]
+lib.pfvi_stages_range.restype = None
+lib.pfvi_stages_range.argtypes = [ctypes.POINTER(ctypes.c_int), ctypes.POINTER(ctypes.c_int)]
 lib.pfvi_two_point_coefficients.restype = ctypes.c_int
 lib.pfvi_two_point_coefficients.argtypes = [ctypes.c_double, ctypes.c_double, ctypes.c_double,
                                             ctypes.c_int, ctypes.POINTER(ctypes.c_double)]

@@ -4,10 +4,12 @@ import math
 import pytest
 import rebound
 
+import rebound_pfvi
+
 from conftest import fixed_step_pfvi, snapshot, two_body
 
 
-@pytest.fixture(params=[2, 3, 4, 5, 6], ids=lambda s: f"s={s}")
+@pytest.fixture(params=rebound_pfvi.STAGES, ids=lambda s: f"s={s}")
 def stages(request):
     """Every bad-input case is checked for every number of stages."""
     return request.param
@@ -43,8 +45,8 @@ def set_raw(sim, field, value):
     ("fitting", -1, r"integrator\.fitting = -1"),
     ("frequency", 4, r"integrator\.frequency = 4 is not valid; allowed: 'curvature', 'fixed', 'radial', 'mean-motion'"),
     ("centre", 3, r"integrator\.centre = 3 is not valid; allowed: 'origin', 'barycentre', 'partner'"),
-    ("stages", 7, r"integrator\.stages = 7 is not supported; allowed: 2 to 6"),
-    ("stages", 1, r"integrator\.stages = 1 is not supported; allowed: 2 to 6"),
+    ("stages", 9, r"integrator\.stages = 9 is not supported; allowed: 2 to 8"),
+    ("stages", 1, r"integrator\.stages = 1 is not supported; allowed: 2 to 8"),
     ("stages", -2, r"integrator\.stages = -2"),
     ("u_max", 0.0, r"integrator\.u_max = 0 is not valid"),
     ("u_max", 3.2, r"integrator\.u_max = 3\.2 is not valid"),

@@ -193,7 +193,10 @@ def kepler_position_error(s, frequency, n, e=0.5):
 ORDER_STEPS = {2: (200, 400), 3: (100, 200), 4: (50, 100), 5: (100, 140), 6: (70, 90)}
 
 
-@pytest.mark.parametrize("s", rebound_pfvi.STAGES)
+# s = 7, 8: on Kepler e = 0.5 the window between the higher-order terms and
+# round-off closes (the classical scheme's order there: test_stages.py, on
+# the oscillator).
+@pytest.mark.parametrize("s", sorted(ORDER_STEPS))
 @pytest.mark.parametrize("frequency", NEW_FREQUENCIES)
 def test_exact_fitting_has_order_2s_minus_2(s, frequency):
     n1, n2 = ORDER_STEPS[s]

@@ -48,7 +48,7 @@ def test_constants_in_the_help_are_the_ones_in_force():
     doc = " ".join(sim.integrator.__doc__.split())
     assert sim.integrator.epsilon == 1e-6 and "Default 1e-6" in doc
     assert sim.integrator.u_max == 1.0 and "Default 1.0," in doc
-    assert "an integer from 2 to 6" in doc and rebound_pfvi.STAGES == (2, 3, 4, 5, 6)
+    assert "an integer from 2 to 8" in doc and rebound_pfvi.STAGES == (2, 3, 4, 5, 6, 7, 8)
 
 
 def test_repr_shows_options_and_statistics_and_no_scratch_pointers():
@@ -69,7 +69,7 @@ def test_options_are_checked_when_the_next_step_starts_as_the_readme_says():
     sim = pfvi()
     sim.integrator.stages = 9  # accepted on assignment
     before = (sim.t, sim.particles[1].x)
-    with pytest.raises(RuntimeError, match=r"^pfvi: integrator.stages = 9 is not supported; allowed: 2 to 6.$"):
+    with pytest.raises(RuntimeError, match=r"^pfvi: integrator.stages = 9 is not supported; allowed: 2 to 8.$"):
         sim.integrate(1.0)
     assert (sim.t, sim.particles[1].x) == before
     with pytest.raises(TypeError):

@@ -76,7 +76,7 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 
 // Defaults and ranges.
 #define PFVI_STAGES_MIN 2
-#define PFVI_STAGES_MAX 6
+#define PFVI_STAGES_MAX 8
 #define PFVI_STAGES_DEFAULT 6
 #define PFVI_U_MAX_DEFAULT 1.0
 #define PFVI_EPSILON_DEFAULT 1e-6
@@ -127,8 +127,8 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // (e = 0.999; unbound and radial pairs get it too): beyond it epsilon's
 // meaning is not kept (the factor would reach 1000 at s = 2 by e = 0.99995).
 #define PFVI_DENSITY_E2_MAX 0.998
-#define PFVI_SYMMETRIC_CONSTANTS {0., 0., 14., 0.32, 0.019, 8.3e-4, 4.4e-5}
-#define PFVI_SYMMETRIC_BETA {0., 0., 1.5, 2.2, 2.5, 3.0, 3.4}
+#define PFVI_SYMMETRIC_CONSTANTS {0., 0., 14., 0.32, 0.019, 8.3e-4, 4.4e-5, 2.3e-6, 1.2e-7}
+#define PFVI_SYMMETRIC_BETA {0., 0., 1.5, 2.2, 2.5, 3.0, 3.4, 3.8, 4.2}
 #define PFVI_KAPPA_MAX 1.0
 // A symmetric step at whose end the density sigma exceeds this many times the
 // one it was sized for (kappa/h) is retried at half the step.
@@ -584,6 +584,8 @@ PFVI_API int pfvi_register(void);
 PFVI_API const char* pfvi_rebound_version_compiled(void);
 PFVI_API size_t pfvi_sizeof_simulation(void);
 PFVI_API size_t pfvi_sizeof_particle(void);
+// The allowed numbers of stages, PFVI_STAGES_MIN and PFVI_STAGES_MAX, for Python.
+PFVI_API void pfvi_stages_range(int* min, int* max);
 // The names of an option's values, for Python: name of value index i of
 // option `field` ("fitting", "frequency", "step_control"), NULL past the last.
 PFVI_API const char* pfvi_option_value_name(const char* field, int i);

@@ -287,12 +287,16 @@ void pfvi_stage_fit_at(const struct pfvi_lobatto* rule, double u, int fitting, s
     }
 }
 
+// The factorisation swapped whole rows (multipliers included, as LAPACK's
+// getrf), so every interchange is applied to b before the forward solve.
 void pfvi_stage_solve(const struct pfvi_stage_fit* fit, int m, double* b){
     for (int k=0; k<m; k++){
         const int p = fit->pivot[k];
         if (p != k){
             const double tmp = b[k]; b[k] = b[p]; b[p] = tmp;
         }
+    }
+    for (int k=0; k<m; k++){
         for (int i=k+1; i<m; i++){
             b[i] -= fit->lu[i][k]*b[k];
         }

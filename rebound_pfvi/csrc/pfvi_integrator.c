@@ -604,6 +604,11 @@ size_t pfvi_sizeof_simulation(void){
     return sizeof(struct reb_simulation);
 }
 
+void pfvi_stages_range(int* min, int* max){
+    *min = PFVI_STAGES_MIN;
+    *max = PFVI_STAGES_MAX;
+}
+
 size_t pfvi_sizeof_particle(void){
     return sizeof(struct reb_particle);
 }

@@ -56,27 +56,24 @@ static void stage_start_of(const struct pfvi_lobatto* rule, const struct pfvi_st
 // One round for one particle: the unknowns y for the forces the iteration
 // carries, h^2 (a^k - ac) at the stage accelerations sa, and for "exact"
 // (u2 > 0) plus u^2 d^k at the points sx where they were evaluated (the
-// residual of the harmonic part the matrix holds): y = yc - solve F. Loops
-// run over the fixed bounds of the padded tables.
-static void stage_round(const struct pfvi_stage_fit* f, const struct pfvi_stage_start* ss,
-        const struct pfvi_centre* centre, int s, double h, const double (*sa)[3], const double (*sx)[3],
-        double (*y)[3]){
+// residual of the harmonic part the matrix holds): y = yc - solve F. Written
+// for a constant s, so that each s gets its own fully unrolled loops.
+static inline __attribute__((always_inline)) void stage_round_n(const struct pfvi_stage_fit* f,
+        const struct pfvi_stage_start* ss, const struct pfvi_centre* centre, double h, const double (*sa)[3],
+        const double (*sx)[3], double (*y)[3], const int s){
     const double h2 = h*h;
     double F[PFVI_STAGES_MAX][3];
-    for (int k=0; k<PFVI_STAGES_MAX; k++){
+    for (int k=0; k<s; k++){
         for (int c=0; c<3; c++){
-            if (k >= s){
-                F[k][c] = 0.;
-            }else if (f->u2 == 0.){
-                F[k][c] = h2*(sa[k][c] - centre->acc[c]);
-            }else{
-                F[k][c] = h2*(sa[k][c] - centre->acc[c]) + f->u2*((sx[k][c] - centre->x[c]) - ss->shift[k][c]);
+            F[k][c] = h2*(sa[k][c] - centre->acc[c]);
+            if (f->u2 != 0.){
+                F[k][c] += f->u2*((sx[k][c] - centre->x[c]) - ss->shift[k][c]);
             }
         }
     }
-    for (int l=0; l<PFVI_STAGES_MAX-1; l++){
+    for (int l=0; l<s-1; l++){
         double sum[3] = {0., 0., 0.};
-        for (int k=0; k<PFVI_STAGES_MAX; k++){
+        for (int k=0; k<s; k++){
             for (int c=0; c<3; c++){
                 sum[c] += f->solve[l][k]*F[k][c];
             }
@@ -84,6 +81,22 @@ static void stage_round(const struct pfvi_stage_fit* f, const struct pfvi_stage_
         for (int c=0; c<3; c++){
             y[l][c] = ss->yc[l][c] - sum[c];
         }
+    }
+}
+
+// One case per s from 3 to PFVI_STAGES_MAX.
+typedef char pfvi_stage_round_has_a_case_per_s[(PFVI_STAGES_MAX == 8) ? 1 : -1];
+
+static void stage_round(const struct pfvi_stage_fit* f, const struct pfvi_stage_start* ss,
+        const struct pfvi_centre* centre, int s, double h, const double (*sa)[3], const double (*sx)[3],
+        double (*y)[3]){
+    switch (s){
+        case 3: stage_round_n(f, ss, centre, h, sa, sx, y, 3); break;
+        case 4: stage_round_n(f, ss, centre, h, sa, sx, y, 4); break;
+        case 5: stage_round_n(f, ss, centre, h, sa, sx, y, 5); break;
+        case 6: stage_round_n(f, ss, centre, h, sa, sx, y, 6); break;
+        case 7: stage_round_n(f, ss, centre, h, sa, sx, y, 7); break;
+        default: stage_round_n(f, ss, centre, h, sa, sx, y, PFVI_STAGES_MAX); break;
     }
 }
 
@@ -299,7 +312,7 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
                     scale = (q > scale) ? q : scale;
                     scale = (d > scale) ? d : scale;
                 }
-                for (int j=0; j<PFVI_STAGES_MAX-1; j++){
+                for (int j=0; j<s-1; j++){
                     for (int c=0; c<3; c++){
                         // (a NaN is kept: it makes the change NaN)
                         const double d = fabs(yn[j][c] - y[j][c]);
