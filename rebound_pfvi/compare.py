@@ -90,7 +90,7 @@ PFVI_SYMMETRIC_EPSILONS = {"quick": (1e-4, 1e-7, 1e-10, 1e-13), "full": tuple(10
 #: osculating-circle control, the default before it, for comparison. (s = 2
 #: is left out: second order, it needs 1e6 steps per orbit for 1e-9.)
 PFVI_LINES = {"quick": ((4, "none", "symmetric"), (6, "none", "symmetric"), (4, "phase", "reversible")),
-              "full": ((4, "none", "symmetric"), (6, "none", "symmetric"),
+              "full": ((4, "none", "symmetric"), (6, "none", "symmetric"), (8, "none", "symmetric"),
                        (4, "exact", "symmetric"), (4, "phase", "reversible"), (4, "none", "reversible"))}
 #: With a given frequency (the oscillator's): the seed's fitting, s = 2 and 4.
 PFVI_FIXED_LINES = ((2, "phase", "reversible"), (4, "phase", "reversible"))

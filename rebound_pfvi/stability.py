@@ -38,8 +38,6 @@ if TYPE_CHECKING:
 
 Vector = Tuple[float, float, float]
 
-#: pfvi's default number of stages: its row is added to every report.
-DEFAULT_STAGES = 6
 FITTINGS = ("phase", "phase-literal", "none")
 STAGES = (2, 4)
 CHECKPOINTS = 100
@@ -365,6 +363,13 @@ class Config:
         return self.family.upper() if self.family != "whfast" else "WHFast"
 
 
+def default_stages() -> int:
+    """pfvi's default number of stages, as the C core sets it: its row is added to every report."""
+    sim = scenes.new_simulation()
+    sim.integrator = "pfvi"
+    return int(sim.integrator.stages)
+
+
 def default_configs(integrators: Sequence[str] = ("pfvi", "ias15", "whfast"), fittings: Sequence[str] = FITTINGS,
                     stages: Sequence[int] = STAGES, epsilon: float = 1e-6,
                     ias15_epsilon: float = 1e-9) -> List[Config]:
@@ -372,8 +377,9 @@ def default_configs(integrators: Sequence[str] = ("pfvi", "ias15", "whfast"), fi
     for family in integrators:
         if family == "pfvi":
             configs += [Config("pfvi", f, s, epsilon) for s in stages for f in fittings]
-            if DEFAULT_STAGES not in stages and "none" in fittings:
-                configs.append(Config("pfvi", "none", DEFAULT_STAGES, epsilon))  # pfvi's defaults
+            default = default_stages()
+            if default not in stages and "none" in fittings:
+                configs.append(Config("pfvi", "none", default, epsilon))  # pfvi's defaults
         elif family == "ias15":
             configs.append(Config("ias15", epsilon=ias15_epsilon))
         elif family == "whfast":

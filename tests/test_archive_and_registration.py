@@ -172,4 +172,4 @@ def test_documentation_lists_every_field():
     assert "'phase-literal'" in doc
     assert (sim.integrator.fitting, sim.integrator.frequency, sim.integrator.centre, sim.integrator.stages,
             sim.integrator.u_max, sim.integrator.omega, sim.integrator.epsilon,
-            sim.integrator.step_control) == ("none", "mean-motion", "partner", 6, 1.0, 0.0, 1e-6, "symmetric")
+            sim.integrator.step_control) == ("none", "mean-motion", "partner", 8, 1.0, 0.0, 1e-6, "symmetric")

@@ -144,10 +144,10 @@ def test_cli_progress_bar_and_failed_runs_in_full_at_the_end(tmp_path):
     assert "7/7 [" in done.stderr and "<00:00" in done.stderr
     assert "did not converge" not in done.stderr
     refusals = [line for line in done.stdout.splitlines() if line.startswith("- fixed-u-40x: pfvi ")]
-    assert len(refusals) == 4, done.stdout  # s = 4 with each fitting, and the default s = 6
+    assert len(refusals) == 4, done.stdout  # s = 4 with each fitting, and the default s = 8
     for line in refusals:  # the whole message, to its last word
         assert (" s=4: refused: pfvi: the 4-stage solve did not converge" in line
-                or " s=6: refused: pfvi: the 6-stage solve did not converge" in line), line
+                or " s=8: refused: pfvi: the 8-stage solve did not converge" in line), line
         assert line.endswith("step not taken, state restored. Lower dt."), line
 
 

@@ -117,7 +117,7 @@ def test_switching_to_ias15_and_back_restarts_pfvi_with_its_defaults():
     E0 = sim.energy()
     sim.integrator = "pfvi"
     # REBOUND frees the old state and creates a new one: defaults, no statistics.
-    assert (sim.integrator.stages, sim.integrator.epsilon, sim.integrator.n_steps) == (6, 1e-6, 0)
+    assert (sim.integrator.stages, sim.integrator.epsilon, sim.integrator.n_steps) == (8, 1e-6, 0)
     sim.integrate(3.0)
     assert sim.t == 3.0
     # The defaults: symmetric steps at epsilon 1e-6, a relative position error of at

@@ -77,7 +77,7 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // Defaults and ranges.
 #define PFVI_STAGES_MIN 2
 #define PFVI_STAGES_MAX 8
-#define PFVI_STAGES_DEFAULT 6
+#define PFVI_STAGES_DEFAULT 8
 #define PFVI_U_MAX_DEFAULT 1.0
 #define PFVI_EPSILON_DEFAULT 1e-6
 
