@@ -1,8 +1,9 @@
-"""ns per step of pfvi beside LEAPFROG, WHFast and IAS15, as ratios from one run.
+"""ns per step of pfvi beside LEAPFROG, WHFast and IAS15, as ratios from one run;
+and the stage solve of every s beside IAS15 on eccentric orbits.
 
 (The heartbeat rows: a Python heartbeat that does nothing, on pfvi and LEAPFROG.)
 
-    python benchmarks/step_cost.py [--repeats 7] [--steps 200000]
+    python benchmarks/step_cost.py [--repeats 7] [--steps 200000] [--periods 100]
 
 Two systems: N = 2 (m = 1 and 1e-3, a = 1, e = 0.5) and a star with 50
 planets (masses 1e-5, a from 1 to 6, small e and inc). Every integrator runs
@@ -10,7 +11,14 @@ the same simulation for the same number of steps (IAS15: its own adaptive
 steps over the same time span, counted with steps_done). Runs are
 interleaved, integrator by integrator, `--repeats` times, and the best time
 is kept: the machines are shared and noisy, so only the ratios in one run
-mean something. Output: a markdown table on stdout.
+mean something.
+
+The second table: the default pfvi (symmetric steps, fitting "none",
+epsilon 1e-6) at every s, and IAS15 at its default epsilon 1e-9, on Kepler
+e = 0.5 and e = 0.95 (m = 1e-3, COM frame) for --periods periods: ns/step,
+force evaluations per step (counted untimed by an empty additional_forces
+callback) and, for pfvi, iterations (rounds of s - 1 evaluations) per stage
+solve. Output: markdown tables on stdout.
 """
 import argparse
 import random
@@ -42,7 +50,7 @@ def star_and_50_planets():
 
 
 SETTINGS = {
-    # The two-point scheme with fixed steps (the integrator's default is s = 4, adaptive).
+    # The two-point scheme with fixed steps (the integrator's default is adaptive, s = 8).
     "pfvi s=2 phase": ("pfvi", {"fitting": "phase", "epsilon": 0., "stages": 2}),
     "pfvi s=2 none": ("pfvi", {"fitting": "none", "epsilon": 0., "stages": 2}),
     # Under a heartbeat pfvi cannot reuse the last step's end force (the
@@ -82,10 +90,61 @@ def measure(make, steps, repeats):
     return best, counts
 
 
+def solve_row(e, setting, periods, repeats):
+    """(ns/step, steps, force evaluations/step, iterations/solve or None) of one setting."""
+    from rebound_pfvi.scenes import Kepler
+    integrator, stages = setting
+    scene = Kepler(e=e, periods=periods)
+    t_end = scene.t_end
+
+    def build():
+        sim = scene.build()
+        if integrator == "pfvi":
+            configure_integrator(sim, "pfvi", stages=stages)
+        else:
+            configure_integrator(sim, "ias15")
+        return sim
+
+    best = float("inf")
+    for _ in range(repeats):
+        sim = build()
+        tick = time.perf_counter()
+        sim.integrate(t_end, exact_finish_time=0)
+        best = min(best, time.perf_counter() - tick)
+    steps = sim.steps_done
+    iterations = sim.integrator.iterations_mean if integrator == "pfvi" else None
+    counted = build()
+    calls = [0]
+
+    def count(simp):
+        calls[0] += 1
+
+    counted.additional_forces = count
+    counted.integrate(t_end, exact_finish_time=0)
+    return best / steps * 1e9, steps, calls[0] / counted.steps_done, iterations
+
+
+def stage_solve_table(periods, repeats):
+    settings = [("pfvi", s) for s in rebound_pfvi.STAGES if s >= 3] + [("ias15", None)]
+    print()
+    print(f"Stage solve, adaptive defaults, Kepler (m = 1e-3, COM frame), {periods:g} periods, "
+          f"best of {repeats}:")
+    print()
+    print("| e | integrator | steps | ns/step | force evaluations/step | iterations/solve |")
+    print("|---|---|---|---|---|---|")
+    for e in (0.5, 0.95):
+        for setting in settings:
+            ns, steps, evaluations, iterations = solve_row(e, setting, periods, repeats)
+            name = f"pfvi s={setting[1]}" if setting[0] == "pfvi" else "ias15"
+            its = f"{iterations:.2f}" if iterations is not None else "-"
+            print(f"| {e:g} | {name} | {steps} | {ns:.0f} | {evaluations:.1f} | {its} |")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeats", type=int, default=7)
     parser.add_argument("--steps", type=int, default=200_000, help="steps at N = 2 (N = 51: steps/50)")
+    parser.add_argument("--periods", type=float, default=100.0, help="orbits of the stage-solve table")
     args = parser.parse_args()
     print(f"rebound {rebound.__version__}, rebound_pfvi {rebound_pfvi.__version__}, "
           f"best of {args.repeats} interleaved runs")
@@ -98,6 +157,7 @@ def main():
         for name in SETTINGS:
             print(f"| {label} | {name} | {counts[name]} | {best[name]:.0f} | "
                   f"{best[name] / best['leapfrog']:.2f} |")
+    stage_solve_table(args.periods, args.repeats)
 
 
 if __name__ == "__main__":

@@ -37,7 +37,7 @@ const struct reb_integrator pfvi_integrator = {
     "With two nodes (stages = 2) the step is explicit and second order, needs one "
     "force evaluation (the acceleration at the end of a step is reused at the start "
     "of the next), and with fitting = 'none' is exactly velocity Verlet. With s = 3 "
-    "to 6 Gauss-Lobatto nodes and interior corrections (K&V, 'Increasing the algebraic "
+    "to " PFVI_STR(PFVI_STAGES_MAX) " Gauss-Lobatto nodes and interior corrections (K&V, 'Increasing the algebraic "
     "order'; Marsden & West 2001, section 2.6) the order is 2s - 2 and each step solves for the stage "
     "points by fixed-point iteration, stopped as in IRKGL16 (Antonana, Makazaga & "
     "Murua 2017, J. Comput. Phys.) or once the change is below " PFVI_STR(PFVI_ITERATION_ROUNDOFF) " "
