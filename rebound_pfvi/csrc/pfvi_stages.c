@@ -1,5 +1,5 @@
 /**
- * pfvi_stages.c: the s-point scheme (stages = 3 .. 6): the discrete Lagrangian
+ * pfvi_stages.c: the s-point scheme (stages = 3 .. 8): the discrete Lagrangian
  * with interior corrections of K&V, "Increasing the algebraic order".
  *
  * Per particle and per Cartesian component (units of unit mass), the step
@@ -11,12 +11,13 @@
  * + delta q^k at t_k + c^k h, and then takes
  *     G h (v_k+1 - v_k) = sum_k w_k [beta_d^k qd^k + h^2 (b^k + bbar^k) a^k]
  * (p_k+1 = D2 Ld minus p_k = -D1 Ld). For given a^k the equations are linear
- * with a matrix that depends only on u (factorised in pfvi_fitting.c), so the
- * solve is a fixed-point iteration: solve the linear system, evaluate forces
- * at the new stage points through REBOUND, repeat. It stops when the largest
- * change of the unknowns is zero or stops decreasing (pfvi_iteration_verdict);
- * it has converged if that change is at round-off level, and is retried
- * shorter or refused otherwise.
+ * with a matrix L that depends only on u (factorised in pfvi_fitting.c), so
+ * the solve is a fixed-point iteration: solve the linear system (a round:
+ * y = L^-1 g - (L^-1 P) F, F the forces at the stage points, P their weights),
+ * evaluate forces at the new stage points through REBOUND, repeat. It stops
+ * when the largest change of the unknowns is below round-off, zero, or no
+ * longer decreasing (pfvi_iteration_verdict); it has converged if that change
+ * is at round-off level, and is retried shorter or refused otherwise.
  *
  * The first iterate uses the stage accelerations of the previous step,
  * extrapolated by their interpolating polynomial, when the previous step ended
