@@ -54,22 +54,30 @@ static void stage_start_of(const struct pfvi_lobatto* rule, const struct pfvi_st
     }
 }
 
-// One round for one particle: the unknowns y for the forces the iteration
-// carries, h^2 (a^k - ac) at the stage accelerations sa, and for "exact"
-// (u2 > 0) plus u^2 d^k at the points sx where they were evaluated (the
-// residual of the harmonic part the matrix holds): y = yc - solve F. Written
+// h^2 times the force the iteration carries at stage k, component c: the
+// acceleration relative to the centre's, and for "exact" (u2 > 0) plus
+// u^2 d^k at the point sx where it was evaluated (the residual of the
+// harmonic part the matrix holds).
+static inline double stage_force_h2(const struct pfvi_stage_fit* f, const struct pfvi_stage_start* ss,
+        const struct pfvi_centre* centre, double h, const double (*sa)[3], const double (*sx)[3], int k, int c){
+    const double h2a = h*h*(sa[k][c] - centre->acc[c]);
+    if (f->u2 == 0.){
+        return h2a;
+    }
+    return h2a + f->u2*((sx[k][c] - centre->x[c]) - ss->shift[k][c]);
+}
+
+// One round for one particle: the unknowns y for the forces F the iteration
+// carries (stage_force_h2, at the stage accelerations sa evaluated at the
+// points sx): y = yc - solve F. Written
 // for a constant s, so that each s gets its own fully unrolled loops.
 static inline __attribute__((always_inline)) void stage_round_n(const struct pfvi_stage_fit* f,
         const struct pfvi_stage_start* ss, const struct pfvi_centre* centre, double h, const double (*sa)[3],
         const double (*sx)[3], double (*y)[3], const int s){
-    const double h2 = h*h;
     double F[PFVI_STAGES_MAX][3];
     for (int k=0; k<s; k++){
         for (int c=0; c<3; c++){
-            F[k][c] = h2*(sa[k][c] - centre->acc[c]);
-            if (f->u2 != 0.){
-                F[k][c] += f->u2*((sx[k][c] - centre->x[c]) - ss->shift[k][c]);
-            }
+            F[k][c] = stage_force_h2(f, ss, centre, h, sa, sx, k, c);
         }
     }
     for (int l=0; l<s-1; l++){
@@ -101,17 +109,6 @@ static void stage_round(const struct pfvi_stage_fit* f, const struct pfvi_stage_
     }
 }
 
-// h^2 times the force the iteration carries at stage k, component c (as
-// stage_round), for the momentum at the step's end.
-static inline double stage_force_h2(const struct pfvi_stage_fit* f, const struct pfvi_stage_start* ss,
-        const struct pfvi_centre* centre, double h, const double (*sa)[3], const double (*sx)[3], int k, int c){
-    const double h2a = h*h*(sa[k][c] - centre->acc[c]);
-    if (f->u2 == 0.){
-        return h2a;
-    }
-    return h2a + f->u2*((sx[k][c] - centre->x[c]) - ss->shift[k][c]);
-}
-
 // The step's position increment q_k+1 - q_k of one component: the change
 // of d = q - c and the centre's drift.
 static inline double stage_increment(const struct pfvi_stage_start* ss, const double (*y)[3], int s, int c){
@@ -135,12 +132,10 @@ static inline void stage_position(const struct pfvi_stage_fit* f, const struct p
 }
 
 // h ddot^k of one particle (its velocity relative to its centre, times h).
-static void stage_velocity_times_h(const struct pfvi_lobatto* rule, const struct pfvi_stage_fit* f,
-        const struct reb_particle* p0, const struct pfvi_centre* centre, const double (*y)[3], int k, double qd[3]){
-    const double d0[3] = {p0->x - centre->x[0], p0->y - centre->x[1], p0->z - centre->x[2]};
-    const int s = rule->s;
+static void stage_velocity_times_h(const struct pfvi_stage_fit* f, const struct pfvi_stage_start* ss,
+        const double (*y)[3], int s, int k, double qd[3]){
     for (int c=0; c<3; c++){
-        double sum = f->beta_d[k]*d0[c] + f->Bbar[k]*y[0][c];
+        double sum = f->beta_d[k]*ss->d0[c] + f->Bbar[k]*y[0][c];
         for (int l=1; l<s-1; l++){
             sum += f->a[k][l]*y[l][c];
         }
@@ -165,7 +160,8 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
             ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
             if (vdep){
                 double qd[3];
-                stage_velocity_times_h(rule, &st->stage_fit[i], &st->start[i], centre, st->unknowns[i], k, qd);
+                stage_velocity_times_h(&st->stage_fit[i], &st->stage_start[i], (const double (*)[3])st->unknowns[i],
+                        s, k, qd);
                 const double t = rule->c[k]*h;
                 ps[i].vx = pfvi_centre_velocity(centre, t, 0) + qd[0]/h;
                 ps[i].vy = pfvi_centre_velocity(centre, t, 1) + qd[1]/h;
@@ -360,10 +356,10 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
         const double (*y)[3] = st->unknowns[i];
         double dv[3] = {0., 0., 0.};
         const struct pfvi_centre* const centre = &st->centre[i];
-        const double d0[3] = {p0[i].x - centre->x[0], p0[i].y - centre->x[1], p0[i].z - centre->x[2]};
+        const double* const d0 = st->stage_start[i].d0;
         for (int k=0; k<s; k++){
             double qd[3];
-            stage_velocity_times_h(rule, f, &p0[i], centre, y, k, qd);
+            stage_velocity_times_h(f, &st->stage_start[i], y, s, k, qd);
             const double wk = rule->w[k], wf = h2*(1. + f->beta_m[k]);
             for (int c=0; c<3; c++){
                 if (f->u2 == 0.){
