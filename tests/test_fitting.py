@@ -1,6 +1,7 @@
 """Fitting 'exact', the frequencies and the centre of the harmonic model
 (issue 14): exact on the oscillator at every s, frame-free, stable for every
 body, of order 2s - 2; the seed's schemes keep the origin."""
+import ctypes
 import math
 
 import numpy as np
@@ -232,6 +233,63 @@ def test_partner_is_the_stiffest_attraction_in_a_hierarchy():
         return math.dist((d.x, d.y, d.z), (dr.x, dr.y, dr.z))
 
     assert moon_error("partner") * 3 < moon_error("barycentre")
+
+
+def partners_by_definition(sim):
+    """Each particle's partner as its definition reads: the first j != i of
+    the attracting bodies (j < N_active, m_j > 0) with the largest
+    (m_i + m_j)/r^3, computed as the core does; N where there is none."""
+    ps = sim.particles
+    n = sim.N
+    n_attracting = min(sim.N_active, n)
+    found = []
+    for i in range(n):
+        best, partner = 0.0, n
+        for j in range(n_attracting):
+            if j == i or not ps[j].m > 0.0:
+                continue
+            dx, dy, dz = ps[j].x - ps[i].x, ps[j].y - ps[i].y, ps[j].z - ps[i].z
+            r2 = dx * dx + dy * dy + dz * dz
+            stiffness = (ps[i].m + ps[j].m) / (r2 * math.sqrt(r2))
+            if stiffness > best:
+                best, partner = stiffness, j
+        found.append(partner)
+    return found
+
+
+def core_partners(sim):
+    out = (ctypes.c_size_t * max(sim.N, 1))()
+    assert rebound_pfvi._lib.pfvi_partners(ctypes.byref(sim), out) == 1
+    return list(out[:sim.N])
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_partner_search_meets_each_pair_once_and_keeps_the_definition(seed):
+    # The core measures each pair once for both bodies (a pair's stiffness is
+    # symmetric); the partners must be those of the definition, ties (equal
+    # stiffness, first index wins), test particles, massless bodies and
+    # N_active included.
+    rng = np.random.default_rng(seed)
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    for k in range(12):
+        sim.add(m=[0.0, 1e-5, 1e-3][k % 3], a=0.5 + rng.random() * 3, e=0.3 * rng.random(),
+                inc=rng.random(), f=6.28 * rng.random())
+    sim.move_to_com()
+    for k in range(5):
+        sim.add(m=0.0, x=rng.normal(), y=rng.normal(), z=rng.normal())  # test particles
+    # An exact tie (coordinates exact in binary): a planet between two equal
+    # moons, each 0.5 away: its partner is the first moon.
+    planet = sim.N
+    sim.add(m=1e-3, x=8.0)
+    sim.add(m=1e-8, x=8.5)
+    sim.add(m=1e-8, x=7.5)
+    if seed % 2:
+        sim.N_active = 9 + seed  # the planet and its moons as test particles, or not
+    found = core_partners(sim)
+    assert found == partners_by_definition(sim)
+    if sim.N_active > planet + 2:
+        assert found[planet:] == [planet + 1, planet, planet]
 
 
 @pytest.mark.parametrize("frequency", ["radial", "mean-motion"])

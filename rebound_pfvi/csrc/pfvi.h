@@ -306,6 +306,7 @@ struct pfvi_centre {
     double acc[3];      // its acceleration, constant over the step (0 but for "partner")
     double a[3];        // the partner's attraction on the particle (0 without a partner)
     double mu;          // G (m_i + m_partner), 0 without a partner
+    double stiffness;   // (m_i + m_partner)/r^3, what made the partner (0 without one)
     size_t partner;     // SIZE_MAX: none (no other body attracts it)
 };
 // The centre's displacement and velocity t after the step's start (component k).
@@ -323,6 +324,9 @@ static inline double pfvi_centre_velocity(const struct pfvi_centre* c, double t,
 // (the centre "partner", the frequency "mean-motion").
 PFVI_INTERNAL void pfvi_centres(const struct reb_particle* p, const struct pfvi_end_state* start, size_t N,
         size_t N_active, double G, int centre, int need_partner, struct pfvi_centre* c);
+// Inspection (tests): each particle's partner in the simulation as it stands
+// (out[i] = N: none); 0 if memory ran out.
+PFVI_API int pfvi_partners(const struct reb_simulation* r, size_t* out);
 // The frequency a step fits a particle to (before limiting), from its
 // position and velocity relative to its centre, d and w, and the
 // acceleration the model refers to: with the centre "partner", the

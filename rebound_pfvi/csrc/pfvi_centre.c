@@ -30,6 +30,7 @@
  * the whole system moves every centre with it.
  */
 #include <math.h>
+#include <stdlib.h>
 #include "pfvi.h"
 
 // Largest |x_k|, for scaling a vector before squaring it.
@@ -52,32 +53,47 @@ void pfvi_centres(const struct reb_particle* p, const struct pfvi_end_state* sta
     }
     const int barycentre = (centre == PFVI_CENTRE_BARYCENTRE && M > 0. && isfinite(M));
     for (size_t i=0; i<N; i++){
-        struct pfvi_centre* const ci = &c[i];
-        *ci = (struct pfvi_centre){{0., 0., 0.}, {0., 0., 0.}, {0., 0., 0.}, {0., 0., 0.}, 0., SIZE_MAX};
-        if (need_partner && G > 0.){
-            double stiffest = 0.;
-            for (size_t j=0; j<n_attracting; j++){
-                if (j == i || !(p[j].m > 0.)){
+        c[i] = (struct pfvi_centre){{0., 0., 0.}, {0., 0., 0.}, {0., 0., 0.}, {0., 0., 0.}, 0., 0., SIZE_MAX};
+    }
+    if (need_partner && G > 0.){
+        // A pair's stiffness (m_i + m_j)/r^3 is the same for both bodies,
+        // so each pair is measured once, when the outer loop reaches the
+        // later body of the two. Each body still meets its candidates in
+        // increasing index, and the first of equal stiffnesses wins.
+        for (size_t i=0; i<N; i++){
+            const int i_attracts = (i < n_attracting && p[i].m > 0.);
+            const size_t before = (i < n_attracting) ? i : n_attracting;
+            for (size_t j=0; j<before; j++){
+                const int j_attracts = (p[j].m > 0.);
+                if (!(i_attracts || j_attracts)){
                     continue;
                 }
                 const double dx = p[j].x - p[i].x, dy = p[j].y - p[i].y, dz = p[j].z - p[i].z;
                 const double r2 = dx*dx + dy*dy + dz*dz;
-                // m_j / r^3 compared as (m_j / r^3)^2 = m_j^2 / r^6 would
-                // overflow sooner; m_j / (r2 sqrt(r2)) is monotonic in it.
-                const double stiffness = (p[i].m + p[j].m)/(r2*sqrt(r2));
-                if (stiffness > stiffest){
-                    stiffest = stiffness;
-                    ci->partner = j;
+                const double m = p[i].m + p[j].m;
+                // m / r^3 compared as (m / r^3)^2 = m^2 / r^6 would
+                // overflow sooner; m / (r2 sqrt(r2)) is monotonic in it.
+                const double stiffness = m/(r2*sqrt(r2));
+                if (j_attracts && stiffness > c[i].stiffness){
+                    c[i].stiffness = stiffness;
+                    c[i].partner = j;
+                }
+                if (i_attracts && stiffness > c[j].stiffness){
+                    c[j].stiffness = stiffness;
+                    c[j].partner = i;
                 }
             }
-            if (ci->partner != SIZE_MAX){
-                const struct reb_particle* const q = &p[ci->partner];
-                const double dx = q->x - p[i].x, dy = q->y - p[i].y, dz = q->z - p[i].z;
-                const double r = sqrt(dx*dx + dy*dy + dz*dz);
-                const double pull = G*q->m/(r*r*r);
-                ci->a[0] = pull*dx; ci->a[1] = pull*dy; ci->a[2] = pull*dz;
-                ci->mu = G*(p[i].m + q->m);
-            }
+        }
+    }
+    for (size_t i=0; i<N; i++){
+        struct pfvi_centre* const ci = &c[i];
+        if (ci->partner != SIZE_MAX){
+            const struct reb_particle* const q = &p[ci->partner];
+            const double dx = q->x - p[i].x, dy = q->y - p[i].y, dz = q->z - p[i].z;
+            const double r = sqrt(dx*dx + dy*dy + dz*dz);
+            const double pull = G*q->m/(r*r*r);
+            ci->a[0] = pull*dx; ci->a[1] = pull*dy; ci->a[2] = pull*dz;
+            ci->mu = G*(p[i].m + q->m);
         }
         if (barycentre){
             ci->x[0] = X[0]/M; ci->x[1] = X[1]/M; ci->x[2] = X[2]/M;
@@ -107,6 +123,21 @@ void pfvi_centres(const struct reb_particle* p, const struct pfvi_end_state* sta
             ci->acc[2] = fi*ai[2] + fj*aj[2];
         }
     }
+}
+
+int pfvi_partners(const struct reb_simulation* r, size_t* out){
+    const size_t N = r->N;
+    struct pfvi_centre* const c = malloc((N ? N : 1)*sizeof(*c));
+    if (!c){
+        return 0;
+    }
+    const double G = (r->gravity == REB_GRAVITY_NONE) ? 0. : r->G;
+    pfvi_centres(r->particles, NULL, N, r->N_active, G, PFVI_CENTRE_ORIGIN, 1, c);
+    for (size_t i=0; i<N; i++){
+        out[i] = (c[i].partner == SIZE_MAX) ? N : c[i].partner;
+    }
+    free(c);
+    return 1;
 }
 
 // sqrt(max(0, -a.d)/|d|^2), with d scaled before squaring.
