@@ -380,8 +380,8 @@ struct pfvi_compensation {
 // Everything besides the particles, N and t that REBOUND's force evaluation
 // reads (gravity.c, boundary.c, the force hooks), kept with the last step's
 // end acceleration: that acceleration is reused only if this is unchanged,
-// bit for bit. Filled by pfvi_force_model_of with its padding zeroed, so
-// that it compares with memcmp.
+// bit for bit (its fields and their REBOUND members: PFVI_FORCE_MODEL_FIELDS
+// in pfvi_state.c).
 struct pfvi_force_model {
     double G;
     double softening;
@@ -525,7 +525,8 @@ PFVI_INTERNAL void pfvi_state_free(struct pfvi_state* st);
 // Scratch for N particles (grows only when N does); 0 (fault recorded) if memory ran out.
 PFVI_INTERNAL int pfvi_scratch(struct pfvi_state* st, size_t N);
 PFVI_INTERNAL int pfvi_particle_finite(const struct reb_particle* p);
-PFVI_INTERNAL struct pfvi_force_model pfvi_force_model_of(const struct reb_simulation* r);
+// The first particle with a non-finite position, velocity or mass; SIZE_MAX if none.
+PFVI_INTERNAL size_t pfvi_first_not_finite(const struct reb_particle* ps, size_t N);
 // Whether the particles, N, t and the force model are, bit for bit, those the last step ended with.
 PFVI_INTERNAL int pfvi_end_is_start(const struct reb_simulation* r, const struct pfvi_state* st);
 // Keeps the end of the step just taken as the next step's start (force reuse).

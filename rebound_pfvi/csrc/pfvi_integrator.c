@@ -341,7 +341,10 @@ static void pfvi_report(struct reb_simulation* r, const struct pfvi_state* st){
 // Whether value is one of an option's values; if not, says which are.
 // (Checked at every step: the message is built only on failure.)
 static int pfvi_enum_valid(struct reb_simulation* r, const char* field, int value,
-        const struct reb_binarydata_enum_descriptor* values){
+        const struct reb_binarydata_enum_descriptor* values, size_t count){
+    if (value >= 0 && (size_t)value < count && values[value].value == value){
+        return 1;  // (the X-macro lists give values 0, 1, ... in order)
+    }
     for (const struct reb_binarydata_enum_descriptor* d=values; d->name[0]; d++){
         if (d->value == value){
             return 1;
@@ -357,10 +360,13 @@ static int pfvi_enum_valid(struct reb_simulation* r, const char* field, int valu
     return 0;
 }
 
+#define PFVI_ENUM_VALID(r, field, value, values) \
+    pfvi_enum_valid(r, field, value, values, sizeof(values)/sizeof(values[0]) - 1)
+
 static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_options* o){
-    if (!pfvi_enum_valid(r, "fitting", o->fitting, pfvi_fitting_enum)
-            || !pfvi_enum_valid(r, "frequency", o->frequency, pfvi_frequency_enum)
-            || !pfvi_enum_valid(r, "centre", o->centre, pfvi_centre_enum)){
+    if (!PFVI_ENUM_VALID(r, "fitting", o->fitting, pfvi_fitting_enum)
+            || !PFVI_ENUM_VALID(r, "frequency", o->frequency, pfvi_frequency_enum)
+            || !PFVI_ENUM_VALID(r, "centre", o->centre, pfvi_centre_enum)){
         return 0;
     }
     if (o->stages < PFVI_STAGES_MIN || o->stages > PFVI_STAGES_MAX){
@@ -380,7 +386,7 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_option
         pfvi_error(r, "pfvi: integrator.epsilon = %g is not valid; it must be finite and >= 0 (0: fixed steps of sim.dt).", o->epsilon);
         return 0;
     }
-    if (!pfvi_enum_valid(r, "step_control", o->step_control, pfvi_step_control_enum)){
+    if (!PFVI_ENUM_VALID(r, "step_control", o->step_control, pfvi_step_control_enum)){
         return 0;
     }
     if (!(isfinite(r->dt) && r->dt != 0.)){
@@ -438,7 +444,7 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
     // integrate() or steps() call (REBOUND resets dt_last_done to 0, or
     // synchronizes at the end of the last), a heartbeat (it may change
     // anything), velocity-dependent forces, or any bit of N, t, the force
-    // model (pfvi_force_model_of), a position, velocity or mass.
+    // model (struct pfvi_force_model), a position, velocity or mass.
     const int reuse = r->dt_last_done != 0. && !r->force_is_velocity_dependent && !r->heartbeat
         && pfvi_end_is_start(r, st);
     if (!reuse){
@@ -474,7 +480,10 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
         || (o->epsilon > 0. && o->step_control == PFVI_STEP_CONTROL_SYMMETRIC);
     pfvi_centres(p0, e, N, r->N_active, (r->gravity == REB_GRAVITY_NONE) ? 0. : r->G,
             fitted ? o->centre : PFVI_CENTRE_ORIGIN, need_partner, st->centre);
-    for (size_t i=0; i<N; i++){
+    for (size_t i=0; !fitted && i<N; i++){
+        st->omega_fit[i] = 0.;
+    }
+    for (size_t i=0; fitted && i<N; i++){
         const size_t j = st->centre[i].partner;
         st->omega_fit[i] = pfvi_frequency(o, &p0[i], (j == SIZE_MAX) ? NULL : &p0[j], &st->centre[i], e[i].a);
         if (isnan(st->omega_fit[i])){

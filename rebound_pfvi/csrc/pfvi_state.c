@@ -8,6 +8,7 @@
  */
 #include <float.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include "pfvi.h"
@@ -104,45 +105,81 @@ int pfvi_particle_finite(const struct reb_particle* p){
         && isfinite(p->vx) && isfinite(p->vy) && isfinite(p->vz) && isfinite(p->m);
 }
 
-struct pfvi_force_model pfvi_force_model_of(const struct reb_simulation* r){
-    struct pfvi_force_model m;
-    memset(&m, 0, sizeof(m));
-    m.G = r->G;
-    m.softening = r->softening;
-    m.opening_angle2 = r->opening_angle2;
-    m.root_size = r->root_size;
-    m.OMEGA = r->OMEGA;
-    m.OMEGAZ = r->OMEGAZ;
-    m.N_root[0] = r->N_root_x; m.N_root[1] = r->N_root_y; m.N_root[2] = r->N_root_z;
-    m.N_active = r->N_active;
-    m.gravity = (int)r->gravity;
-    m.testparticle_type = r->testparticle_type;
-    m.force_is_velocity_dependent = r->force_is_velocity_dependent;
-    m.boundary = (int)r->boundary;
-    m.N_ghost[0] = r->N_ghost_x; m.N_ghost[1] = r->N_ghost_y; m.N_ghost[2] = r->N_ghost_z;
-    m.additional_forces = r->additional_forces;
-    m.gravity_custom = r->gravity_custom;
-    m.extras = r->extras;
-    return m;
+// x - x is 0 for a finite x and NaN otherwise: one sum over all particles
+// says, without a branch per value, whether any is not finite.
+size_t pfvi_first_not_finite(const struct reb_particle* ps, size_t N){
+    double sum = 0.;
+    for (size_t i=0; i<N; i++){
+        const struct reb_particle* const p = &ps[i];
+        sum += ((p->x - p->x) + (p->y - p->y) + (p->z - p->z))
+            + ((p->vx - p->vx) + (p->vy - p->vy) + (p->vz - p->vz)) + (p->m - p->m);
+    }
+    if (sum == 0.){
+        return SIZE_MAX;
+    }
+    size_t i = 0;
+    while (i < N && pfvi_particle_finite(&ps[i])){
+        i++;
+    }
+    return i;
+}
+
+// Whether n doubles are the same bit for bit (memcmp's meaning, inlined:
+// 0 and -0 differ, a NaN equals itself).
+static inline int same_bits(const double* a, const double* b, int n){
+    uint64_t differ = 0;
+    for (int k=0; k<n; k++){
+        uint64_t x, y;
+        memcpy(&x, &a[k], sizeof(x));
+        memcpy(&y, &b[k], sizeof(y));
+        differ |= x ^ y;
+    }
+    return differ == 0;
+}
+
+// The force model's fields, listed once: D(double), S(size_t), I(int; REBOUND keeps enums),
+// P(pointer field), each with the REBOUND member it keeps.
+#define PFVI_FORCE_MODEL_FIELDS(D, S, I, P) \
+    D(G, G) D(softening, softening) D(opening_angle2, opening_angle2) D(root_size, root_size) \
+    D(OMEGA, OMEGA) D(OMEGAZ, OMEGAZ) \
+    S(N_root[0], N_root_x) S(N_root[1], N_root_y) S(N_root[2], N_root_z) S(N_active, N_active) \
+    I(gravity, gravity) I(testparticle_type, testparticle_type) \
+    I(force_is_velocity_dependent, force_is_velocity_dependent) I(boundary, boundary) \
+    I(N_ghost[0], N_ghost_x) I(N_ghost[1], N_ghost_y) I(N_ghost[2], N_ghost_z) \
+    P(additional_forces, additional_forces) P(gravity_custom, gravity_custom) P(extras, extras)
+
+static void force_model_keep(const struct reb_simulation* r, struct pfvi_force_model* m){
+#define PFVI_KEEP(field, member) m->field = r->member;
+#define PFVI_KEEP_INT(field, member) m->field = (int)r->member;
+    PFVI_FORCE_MODEL_FIELDS(PFVI_KEEP, PFVI_KEEP, PFVI_KEEP_INT, PFVI_KEEP)
+#undef PFVI_KEEP
+#undef PFVI_KEEP_INT
+}
+
+static int force_model_unchanged(const struct reb_simulation* r, const struct pfvi_force_model* m){
+    int changed = 0;
+#define PFVI_SAME_DOUBLE(field, member) changed |= !same_bits(&m->field, &r->member, 1);
+#define PFVI_SAME(field, member) changed |= (m->field != r->member);
+#define PFVI_SAME_INT(field, member) changed |= (m->field != (int)r->member);
+    PFVI_FORCE_MODEL_FIELDS(PFVI_SAME_DOUBLE, PFVI_SAME, PFVI_SAME_INT, PFVI_SAME)
+#undef PFVI_SAME_DOUBLE
+#undef PFVI_SAME
+#undef PFVI_SAME_INT
+    return !changed;
 }
 
 int pfvi_end_is_start(const struct reb_simulation* r, const struct pfvi_state* st){
     const size_t N = r->N;
-    if (st->cache_N != N || st->cache_t != r->t){
-        return 0;
-    }
-    const struct pfvi_force_model model = pfvi_force_model_of(r);
-    if (memcmp(&model, &st->cache_model, sizeof(model))){
+    if (st->cache_N != N || st->cache_t != r->t || !force_model_unchanged(r, &st->cache_model)){
         return 0;
     }
     const struct reb_particle* const ps = r->particles;
     const struct pfvi_end_state* const e = st->end;
+    int same = 1;
     for (size_t i=0; i<N; i++){
-        if (memcmp(&ps[i].x, e[i].xv, sizeof(e[i].xv)) || memcmp(&ps[i].m, &e[i].m, sizeof(double))){
-            return 0;
-        }
+        same &= same_bits(&ps[i].x, e[i].xv, 6) & same_bits(&ps[i].m, &e[i].m, 1);
     }
-    return 1;
+    return same;
 }
 
 void pfvi_keep_end(const struct reb_simulation* r, struct pfvi_state* st, size_t N){
@@ -155,7 +192,7 @@ void pfvi_keep_end(const struct reb_simulation* r, struct pfvi_state* st, size_t
     }
     st->cache_N = N;
     st->cache_t = r->t;
-    st->cache_model = pfvi_force_model_of(r);
+    force_model_keep(r, &st->cache_model);
     st->end_N = N;
 }
 
@@ -171,7 +208,7 @@ void pfvi_forget_edited(const struct reb_simulation* r, struct pfvi_state* st){
     const struct pfvi_end_state* const e = st->end;
     int edited = 0;
     for (size_t i=0; i<N; i++){
-        if (memcmp(&ps[i].x, e[i].xv, sizeof(e[i].xv)) || memcmp(&ps[i].m, &e[i].m, sizeof(double))){
+        if (!(same_bits(&ps[i].x, e[i].xv, 6) && same_bits(&ps[i].m, &e[i].m, 1))){
             st->compensation[i] = (struct pfvi_compensation){{0., 0., 0.}, {0., 0., 0.}};
             edited = 1;
         }
@@ -266,7 +303,11 @@ int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, si
         return 0;
     }
     const struct reb_particle* const ps = r->particles;
+    double sum = 0.;  // as in pfvi_first_not_finite
     for (size_t i=0; i<N; i++){
+        sum += (ps[i].ax - ps[i].ax) + (ps[i].ay - ps[i].ay) + (ps[i].az - ps[i].az);
+    }
+    for (size_t i=0; sum != 0. && i<N; i++){
         if (!(isfinite(ps[i].ax) && isfinite(ps[i].ay) && isfinite(ps[i].az))){
             // A position or velocity that overflowed in the step is the cause
             // to name, not the force it produced.

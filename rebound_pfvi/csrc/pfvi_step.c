@@ -52,13 +52,11 @@ enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* st,
     if (trial != PFVI_TRIAL_OK){
         return trial;
     }
-    const struct reb_particle* const ps = r->particles;
-    for (size_t i=0; i<N; i++){
-        if (!pfvi_particle_finite(&ps[i])){
-            pfvi_roll_back(r, st, N, t0);
-            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_NOT_FINITE, .particle = i, .t0 = t0};
-            return PFVI_TRIAL_ERROR;
-        }
+    const size_t bad = pfvi_first_not_finite(r->particles, N);
+    if (bad != SIZE_MAX){
+        pfvi_roll_back(r, st, N, t0);
+        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_NOT_FINITE, .particle = bad, .t0 = t0};
+        return PFVI_TRIAL_ERROR;
     }
     st->trial.n_limited = n_limited;
     st->trial.omega_min = omega_min;

@@ -81,6 +81,11 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
     struct reb_particle* const p0 = st->start;
     struct pfvi_end_state* const e = st->end;
     const int literal = (st->options.fitting == PFVI_FITTING_PHASE_LITERAL);
+    // Unfitted, every centre is the origin at rest and u = 0: the step is
+    // velocity Verlet, x += h (v + k a0) and v += k (a0 + a1) with k = h/2,
+    // with the carried low-order parts; what follows with zero centres and
+    // omega (the same numbers, spared the products with zeros).
+    const int verlet = (st->options.fitting == PFVI_FITTING_NONE);
 
     // Kick with the residual force, then rotate with the harmonic flow about
     // the centre c(t) = c0 + (t - t0) vc (pfvi_centre.c), in d = q - c and
@@ -88,7 +93,23 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
     // is an increment of x and v, added with compensated summation;
     // "phase-literal" and cos u < 0 use plain products and drop the carried
     // low-order parts.
-    for (size_t i=0; i<N; i++){
+    for (size_t i=0; verlet && i<N; i++){
+        const struct reb_particle* const q = &p0[i];
+        const double* const a = e[i].a;
+        const double k = st->fit[i].half_kick, h_drift = st->fit[i].h_sinc_u;
+        const struct pfvi_compensation* const comp = &st->compensation[i];
+        const double kick[3] = {k*a[0], k*a[1], k*a[2]};
+        st->dx[i] = (struct reb_vec3d){h_drift*(q->vx + kick[0]) + comp->x[0],
+            h_drift*(q->vy + kick[1]) + comp->x[1], h_drift*(q->vz + kick[2]) + comp->x[2]};
+        st->dv[i] = (struct reb_vec3d){kick[0] + comp->v[0], kick[1] + comp->v[1], kick[2] + comp->v[2]};
+        ps[i].x = q->x + st->dx[i].x;
+        ps[i].y = q->y + st->dx[i].y;
+        ps[i].z = q->z + st->dx[i].z;
+        ps[i].vx = q->vx + st->dv[i].x;
+        ps[i].vy = q->vy + st->dv[i].y;
+        ps[i].vz = q->vz + st->dv[i].z;
+    }
+    for (size_t i=0; !verlet && i<N; i++){
         const struct reb_particle* const q = &p0[i];
         const double* const a = e[i].a;
         const struct pfvi_two_point_fit* const f = &st->fit[i];
@@ -148,7 +169,14 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
             return PFVI_TRIAL_ERROR;
         }
     }
-    for (size_t i=0; i<N; i++){
+    for (size_t i=0; verlet && i<N; i++){
+        const double k = st->fit[i].half_kick;
+        st->dv[i].x += k*ps[i].ax; st->dv[i].y += k*ps[i].ay; st->dv[i].z += k*ps[i].az;
+        ps[i].vx = p0[i].vx + st->dv[i].x;
+        ps[i].vy = p0[i].vy + st->dv[i].y;
+        ps[i].vz = p0[i].vz + st->dv[i].z;
+    }
+    for (size_t i=0; !verlet && i<N; i++){
         const struct pfvi_two_point_fit* const f = &st->fit[i];
         const double w2 = f->omega*f->omega;
         double d[3];
