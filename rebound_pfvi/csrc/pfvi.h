@@ -197,6 +197,10 @@ struct pfvi_stage_fit {
     // -solve[l][k] per unit of the force carried at stage k. Zero beyond s
     // stages and s - 1 unknowns, so that a round loops over fixed bounds.
     double solve[PFVI_STAGES_MAX-1][PFVI_STAGES_MAX];
+    // The matrix's inverse applied to the start terms: the unknowns for zero
+    // force are -(G h w_k) start_momentum - d_k start_offset, per component.
+    double start_momentum[PFVI_STAGES_MAX-1];
+    double start_offset[PFVI_STAGES_MAX-1];
 };
 
 // |u| = |omega h| above u_max is limited to u_max (omega reduced to match);

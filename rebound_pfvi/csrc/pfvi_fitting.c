@@ -273,7 +273,15 @@ void pfvi_stage_fit_at(const struct pfvi_lobatto* rule, double u, int fitting, s
     // solve = L^-1 P, P the weights of the force at stage k in each
     // equation: w_k b^k in row 0 (the momentum), w_j at node j in row j.
     memset(fit->solve, 0, sizeof(fit->solve));
+    memset(fit->start_momentum, 0, sizeof(fit->start_momentum));
+    memset(fit->start_offset, 0, sizeof(fit->start_offset));
     if (*det != 0.){
+        fit->start_momentum[0] = 1.;
+        pfvi_stage_solve(fit, m, fit->start_momentum);
+        for (int e=0; e<m; e++){
+            fit->start_offset[e] = fit->q0_row[e];
+        }
+        pfvi_stage_solve(fit, m, fit->start_offset);
         for (int k=0; k<s; k++){
             double column[PFVI_STAGES_MAX-1];
             for (int e=0; e<m; e++){

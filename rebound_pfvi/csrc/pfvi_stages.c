@@ -38,14 +38,9 @@ static void stage_start_of(const struct pfvi_lobatto* rule, const struct pfvi_st
     for (int c=0; c<3; c++){
         ss->q0[c] = q0[c];
         ss->d0[c] = q0[c] - centre->x[c];
-        double g[PFVI_STAGES_MAX-1];
-        g[0] = -f->G*h*v0[c] - f->q0_row[0]*ss->d0[c];
-        for (int j=1; j<m; j++){
-            g[j] = -f->q0_row[j]*ss->d0[c];
-        }
-        pfvi_stage_solve(f, m, g);
+        const double momentum = f->G*h*v0[c];
         for (int l=0; l<PFVI_STAGES_MAX-1; l++){
-            ss->yc[l][c] = (l < m) ? g[l] : 0.;
+            ss->yc[l][c] = (l < m) ? -(momentum*f->start_momentum[l] + ss->d0[c]*f->start_offset[l]) : 0.;
         }
         for (int k=0; k<PFVI_STAGES_MAX; k++){
             ss->base[k][c] = (k < s) ? f->beta_m[k]*ss->d0[c] : 0.;
@@ -199,15 +194,18 @@ static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
         // x[j][m] = l_m(tau_j): the Lagrange basis of the source's nodes at
         // this step's, in units of the source's step (which starts at t0 for
         // a retry, and ends there for the last step).
+        // l_m(tau) = lagrange[m] (prod_(n < m) (tau - c^n)) (prod_(n > m) (tau - c^n)).
         const double rho = h/(retry ? st->retry_h : st->predictor_h);
         for (int j=0; j<s; j++){
             const double tau = (retry ? 0. : 1.) + rho*rule->c[j];
-            for (int m=0; m<s; m++){
-                double l = rule->lagrange[m];
-                for (int n=0; n<s; n++){
-                    if (n != m) l *= tau - rule->c[n];
-                }
-                x[j][m] = l;
+            double below[PFVI_STAGES_MAX], above = 1.;
+            below[0] = 1.;
+            for (int n=1; n<s; n++){
+                below[n] = below[n-1]*(tau - rule->c[n-1]);
+            }
+            for (int m=s-1; m>=0; m--){
+                x[j][m] = rule->lagrange[m]*(below[m]*above);
+                above *= tau - rule->c[m];
             }
         }
     }
