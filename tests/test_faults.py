@@ -3,6 +3,7 @@ not taken, t and every particle stay bit-identical, and the error says why."""
 import math
 
 import pytest
+import rebound
 
 from conftest import STEP_MODES, snapshot, two_body
 
@@ -108,3 +109,30 @@ def test_adaptive_steps_shorten_a_step_whose_stage_solve_fails(mode):
 
 
 # A callback changing N mid-step: tests/test_force_model_changes.py (every particle's bytes).
+
+
+@pytest.mark.parametrize("fitting", ["none", "phase"])
+def test_a_value_that_overflows_in_the_step_is_named_and_the_step_undone(fitting):
+    # Gravity off and a constant push of 1e308: the force at the step's end
+    # stays finite, so only the check of the particles after the step sees
+    # that particle 1's velocity and position overflowed (two-point step).
+    sim = rebound.Simulation()
+    sim.gravity = "none"
+    sim.add(m=1.0, x=1.0)
+    sim.add(m=1.0, y=1.0, vx=1.0)
+
+    def push(simp):
+        simp.contents.particles[1].ax = 1e308
+
+    sim.additional_forces = push
+    sim.integrator = "pfvi"
+    sim.integrator.stages = 2
+    sim.integrator.epsilon = 0.0
+    sim.integrator.fitting = fitting
+    sim.dt = 10.0
+    before = snapshot(sim)
+    with pytest.raises(RuntimeError, match=r"particle 1 became non-finite in the step from t = 0; "
+                                           r"step not taken, state restored"):
+        sim.steps(1)
+    assert snapshot(sim) == before
+    assert sim.integrator.n_steps == 0
