@@ -18,7 +18,8 @@ epsilon 1e-6) at every s, and IAS15 at its default epsilon 1e-9, on Kepler
 e = 0.5 and e = 0.95 (m = 1e-3, COM frame) for --periods periods: ns/step,
 force evaluations per step (counted untimed by an empty additional_forces
 callback) and, for pfvi, iterations (rounds of s - 1 evaluations) per stage
-solve. Output: markdown tables on stdout.
+solve, and the run time over IAS15's for the same orbits (the runs of one
+e interleaved). Output: markdown tables on stdout.
 """
 import argparse
 import random
@@ -90,54 +91,63 @@ def measure(make, steps, repeats):
     return best, counts
 
 
-def solve_row(e, setting, periods, repeats):
-    """(ns/step, steps, force evaluations/step, iterations/solve or None) of one setting."""
+def _solve_build(e, setting, periods):
     from rebound_pfvi.scenes import Kepler
     integrator, stages = setting
     scene = Kepler(e=e, periods=periods)
-    t_end = scene.t_end
+    sim = scene.build()
+    if integrator == "pfvi":
+        configure_integrator(sim, "pfvi", stages=stages)
+    else:
+        configure_integrator(sim, "ias15")
+    return sim, scene.t_end
 
-    def build():
-        sim = scene.build()
-        if integrator == "pfvi":
-            configure_integrator(sim, "pfvi", stages=stages)
-        else:
-            configure_integrator(sim, "ias15")
-        return sim
 
-    best = float("inf")
+def solve_rows(e, settings, periods, repeats):
+    """setting -> (ns/step, steps, force evaluations/step, iterations/solve or None),
+    the settings' runs interleaved as in the first table."""
+    best = {setting: float("inf") for setting in settings}
+    done = {}
     for _ in range(repeats):
-        sim = build()
-        tick = time.perf_counter()
-        sim.integrate(t_end, exact_finish_time=0)
-        best = min(best, time.perf_counter() - tick)
-    steps = sim.steps_done
-    iterations = sim.integrator.iterations_mean if integrator == "pfvi" else None
-    counted = build()
-    calls = [0]
+        for setting in settings:
+            sim, t_end = _solve_build(e, setting, periods)
+            tick = time.perf_counter()
+            sim.integrate(t_end, exact_finish_time=0)
+            best[setting] = min(best[setting], time.perf_counter() - tick)
+            done[setting] = sim
+    rows = {}
+    for setting in settings:
+        sim = done[setting]
+        counted, t_end = _solve_build(e, setting, periods)
+        calls = [0]
 
-    def count(simp):
-        calls[0] += 1
+        def count(simp):
+            calls[0] += 1
 
-    counted.additional_forces = count
-    counted.integrate(t_end, exact_finish_time=0)
-    return best / steps * 1e9, steps, calls[0] / counted.steps_done, iterations
+        counted.additional_forces = count
+        counted.integrate(t_end, exact_finish_time=0)
+        iterations = sim.integrator.iterations_mean if setting[0] == "pfvi" else None
+        rows[setting] = (best[setting] / sim.steps_done * 1e9, sim.steps_done,
+                         calls[0] / counted.steps_done, iterations, best[setting])
+    return rows
 
 
 def stage_solve_table(periods, repeats):
     settings = [("pfvi", s) for s in rebound_pfvi.STAGES if s >= 3] + [("ias15", None)]
     print()
     print(f"Stage solve, adaptive defaults, Kepler (m = 1e-3, COM frame), {periods:g} periods, "
-          f"best of {repeats}:")
+          f"best of {repeats} interleaved runs:")
     print()
-    print("| e | integrator | steps | ns/step | force evaluations/step | iterations/solve |")
-    print("|---|---|---|---|---|---|")
+    print("| e | integrator | steps | ns/step | force evaluations/step | iterations/solve | run time / IAS15's |")
+    print("|---|---|---|---|---|---|---|")
     for e in (0.5, 0.95):
+        rows = solve_rows(e, settings, periods, repeats)
+        ias15 = rows[("ias15", None)][4]
         for setting in settings:
-            ns, steps, evaluations, iterations = solve_row(e, setting, periods, repeats)
+            ns, steps, evaluations, iterations, wall = rows[setting]
             name = f"pfvi s={setting[1]}" if setting[0] == "pfvi" else "ias15"
             its = f"{iterations:.2f}" if iterations is not None else "-"
-            print(f"| {e:g} | {name} | {steps} | {ns:.0f} | {evaluations:.1f} | {its} |")
+            print(f"| {e:g} | {name} | {steps} | {ns:.0f} | {evaluations:.1f} | {its} | {wall / ias15:.2f} |")
 
 
 def main():
