@@ -76,6 +76,13 @@ static int final_kick_velocity_dependent(struct reb_simulation* r, struct pfvi_s
     return 0;
 }
 
+// The particle at the start q moved by the step's increments of x and v.
+static inline void take_increments(struct reb_particle* p, const struct reb_particle* q,
+        struct reb_vec3d dx, struct reb_vec3d dv){
+    p->x = q->x + dx.x; p->y = q->y + dx.y; p->z = q->z + dx.z;
+    p->vx = q->vx + dv.x; p->vy = q->vy + dv.y; p->vz = q->vz + dv.z;
+}
+
 static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){
     struct reb_particle* const ps = r->particles;
     struct reb_particle* const p0 = st->start;
@@ -102,12 +109,7 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
         st->dx[i] = (struct reb_vec3d){h_drift*(q->vx + kick[0]) + comp->x[0],
             h_drift*(q->vy + kick[1]) + comp->x[1], h_drift*(q->vz + kick[2]) + comp->x[2]};
         st->dv[i] = (struct reb_vec3d){kick[0] + comp->v[0], kick[1] + comp->v[1], kick[2] + comp->v[2]};
-        ps[i].x = q->x + st->dx[i].x;
-        ps[i].y = q->y + st->dx[i].y;
-        ps[i].z = q->z + st->dx[i].z;
-        ps[i].vx = q->vx + st->dv[i].x;
-        ps[i].vy = q->vy + st->dv[i].y;
-        ps[i].vz = q->vz + st->dv[i].z;
+        take_increments(&ps[i], q, st->dx[i], st->dv[i]);
     }
     for (size_t i=0; !verlet && i<N; i++){
         const struct reb_particle* const q = &p0[i];
@@ -136,12 +138,7 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
                 (kick_x + (rc*(vx - c->v[0]) - f->omega_sin_u*d[0]) + h*c->acc[0]) + comp->v[0],
                 (kick_y + (rc*(vy - c->v[1]) - f->omega_sin_u*d[1]) + h*c->acc[1]) + comp->v[1],
                 (kick_z + (rc*(vz - c->v[2]) - f->omega_sin_u*d[2]) + h*c->acc[2]) + comp->v[2]};
-            ps[i].x = q->x + st->dx[i].x;
-            ps[i].y = q->y + st->dx[i].y;
-            ps[i].z = q->z + st->dx[i].z;
-            ps[i].vx = q->vx + st->dv[i].x;
-            ps[i].vy = q->vy + st->dv[i].y;
-            ps[i].vz = q->vz + st->dv[i].z;
+            take_increments(&ps[i], q, st->dx[i], st->dv[i]);
         }else{
             const double g = literal ? f->gamma : 1.;
             const double wx = (q->vx - c->v[0])/g + kick_x, wy = (q->vy - c->v[1])/g + kick_y,
