@@ -130,10 +130,11 @@ def test_a_capped_step_restarts_the_track_from_the_density():
 def test_a_step_into_a_close_approach_is_retried_shorter(s):
     # Burrau's problem (3, 4, 5 at rest on a 3-4-5 triangle, G = 1, to t = 20):
     # a third body's close approach raises the density 10^3-fold within one
-    # step, which the symmetric track cannot foresee. Without the check on
-    # the step's end density the default s = 6 took 191 steps and ended with
-    # an energy error of 339 (2.4 in the stability report), silently; with
-    # it, 650 steps and 6.6e-7 (s = 6), 3 of them retried.
+    # step, which the symmetric track cannot foresee. Without the checks at
+    # the step's end the default s = 6 took 191 steps and ended with an
+    # energy error of 339 (2.4 in the stability report), silently; with
+    # them, 520 steps and 1.2e-8 (s = 6), 1 retried (s = 4, 6, 8: 1 to 2;
+    # s = 4 then takes 8 more asymmetric steps while lambda falls back).
     sim = rebound.Simulation()
     for m, x, y in ((3.0, 1.0, 3.0), (4.0, -2.0, -1.0), (5.0, 1.0, -1.0)):
         sim.add(m=m, x=x, y=y)
@@ -141,10 +142,10 @@ def test_a_step_into_a_close_approach_is_retried_shorter(s):
     configure(sim, "pfvi", stages=s)
     E0 = sim.energy()
     sim.integrate(20.0)
-    assert abs(sim.energy() / E0 - 1) < 1e-5
-    assert sim.integrator.n_rejected == sim.integrator.n_asymmetric < 10
-    if s == 6:
-        assert sim.integrator.n_rejected > 0  # the run that failed silently without the check
+    assert abs(sim.energy() / E0 - 1) < 1e-6
+    # Every retried step is asymmetric; so are the steps after which lambda
+    # falls back (no retry): a few in all.
+    assert 0 < sim.integrator.n_rejected <= sim.integrator.n_asymmetric < 20
 
 
 @pytest.mark.parametrize("e", [0.9, 0.99, 0.9999])

@@ -127,12 +127,49 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // (e = 0.999; unbound and radial pairs get it too): beyond it epsilon's
 // meaning is not kept (the factor would reach 1000 at s = 2 by e = 0.99995).
 #define PFVI_DENSITY_E2_MAX 0.998
+// A term below this fraction of the largest so far is not computed: it
+// would change sigma by less than its K-th power over K (0.3^8/8 = 8e-6).
+#define PFVI_DENSITY_NEGLIGIBLE 0.3
 #define PFVI_SYMMETRIC_CONSTANTS {0., 0., 14., 0.32, 0.019, 8.3e-4, 4.4e-5, 2.3e-6, 1.2e-7}
 #define PFVI_SYMMETRIC_BETA {0., 0., 1.5, 2.2, 2.5, 3.0, 3.4, 3.8, 4.2}
 #define PFVI_KAPPA_MAX 1.0
+// Epsilon below which the symmetric control's error per orbit stops
+// falling (round-off; measured, Kepler e = 0.5, 10 orbits): a smaller
+// request is taken as this, per s. (Above C_s KAPPA_MAX^(2s - 2) kappa is
+// held at KAPPA_MAX: requests there take its steps.)
+#define PFVI_EPSILON_FLOORS {0., 0., 1e-10, 1e-12, 1e-13, 1e-14, 1e-14, 1e-14, 1e-14}
 // A symmetric step at whose end the density sigma exceeds this many times the
 // one it was sized for (kappa/h) is retried at half the step.
 #define PFVI_DENSITY_JUMP_MAX 3.0
+// Members of the subsystem a body's Kepler term refers to, at most (the
+// partner and what it is bound to more tightly: pfvi_timescales.c).
+#define PFVI_SUBSYSTEM_MAX 8
+// An encounter term is nu_cr (1 + c cos^2 theta) (theta between the pair's
+// r and v): c (pfvi_timescales.c).
+#define PFVI_ENCOUNTER_APPROACH 1.0
+// The a posteriori check of a symmetric step: its stages resolve each
+// particle's acceleration to u = ((s - 1)! |D|/A)^(1/(s - 1)) (D the leading
+// coefficient of their polynomial, A the largest |a|), about h times the
+// particle's fastest time scale. Along Kepler orbits of e = 0 ... 0.9999
+// u <= RESOLUTION_s kappa (measured: 1.02, 1.42, 1.82, 2.15, 2.50, 2.90,
+// 3.28 for s = 2 ... 8, each raised by 5%). A step whose stages imply an
+// error (u/(RESOLUTION_s kappa))^(2s - 2) above RESOLUTION_MAX is retaken
+// shorter (at most RESOLUTION_RETRIES times) and the density scaled up
+// (lambda, density_scale) by the factor it took; lambda falls back towards
+// 1 where the stages resolve whole intervals RESOLUTION_SLACK times finer
+// than needed.
+#define PFVI_RESOLUTION_CONSTANTS {0., 0., 1.1, 1.5, 1.9, 2.3, 2.6, 3.0, 3.4}
+#define PFVI_RESOLUTION_MAX 3.
+#define PFVI_RESOLUTION_RETRIES 4
+#define PFVI_RESOLUTION_SLACK 2.0
+// REBOUND's sim.dt of a new simulation (reb_simulation_create): not taken
+// as a cap on the first step of the symmetric control.
+#define PFVI_REBOUND_DT_DEFAULT 0.001
+// A stage predictor extrapolates the last step's stages over at most this
+// many of its lengths; beyond, the first iterate is the start state's
+// Taylor path (a step after a much shorter one: a capped step).
+#define PFVI_PREDICTOR_RATIO_MAX 2.0
+
 
 /* ---------------------------------------------------- quadrature (lobatto) */
 
@@ -299,6 +336,52 @@ struct pfvi_end_state {
     double a[3];
 };
 
+/* ------------------------------------------- geometry (time scales) */
+
+// What the time scales see of REBOUND's gravity: G (0 without gravity), the
+// softening, which bodies attract (index < N_active, m > 0), and the ghost
+// boxes the force sums over (position and velocity shifts of an image; the
+// box itself first, and image n_images - 1 - g mirrors image g).
+struct pfvi_field {
+    double G;
+    double softening2;
+    size_t N_active;
+    size_t n_images;
+    const struct reb_vec6d* images;
+};
+
+// A body's partner: the attracting body j != i (j < N_active, m_j > 0), or
+// ghost image of one, of largest (m_i + m_j)/r^3 (r softened), the tightest
+// pair i is in; the first of equal stiffnesses wins.
+struct pfvi_partner {
+    size_t j;           // SIZE_MAX: none (gravity off, G = 0, or no other attracting body)
+    size_t image;       // the ghost box j's image lies in (0: the box itself)
+    double stiffness;   // (m_i + m_j)/r^3, 0 without a partner
+};
+// Every body's partner (pfvi_timescales.c).
+PFVI_INTERNAL void pfvi_partner_search(const struct reb_particle* p, size_t N, const struct pfvi_field* f,
+        struct pfvi_partner* out);
+// The step density sigma of the symmetric control at the particles p (with
+// the accelerations of `start`, or p's own if NULL) and its logarithmic
+// time derivative: the smooth maximum of each body's Kepler term about the
+// subsystem it orbits and each unbound pair's encounter term, for the
+// method of order 2s - 2. Fills partners.
+// Returns 0 (sigma = 0) if no body has a partner.
+PFVI_INTERNAL int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state* start, size_t N,
+        const struct pfvi_field* f, int s, struct pfvi_partner* partners, double* sigma, double* dlog_sigma);
+// How well a step's s stages resolve one particle's acceleration: |D|/A, D
+// the leading coefficient of the polynomial through the stage accelerations
+// a[k] (weights: the barycentric weights of the nodes on [0, 1]) and A the
+// largest |a[k]|; 0 if every a[k] is 0.
+PFVI_INTERNAL double pfvi_stage_resolution(const double (*a)[3], const double* weights, int s);
+// Inspection (tests): each particle's partner in the simulation as it stands
+// (out[i] = N: none); 0 if memory ran out.
+PFVI_API int pfvi_partners(struct reb_simulation* r, size_t* out);
+// Inspection (tests): out = (sigma, d log(sigma)/dt) of the symmetric control
+// for s stages at the simulation as it stands (its accelerations are
+// evaluated); 0 without pairs.
+PFVI_API int pfvi_density_of(struct reb_simulation* r, int stages, double* out);
+
 /* ------------------------------------------------ geometry (centre) */
 
 // The centre of one particle's harmonic model over a step, c(t0 + t) =
@@ -310,7 +393,6 @@ struct pfvi_centre {
     double acc[3];      // its acceleration, constant over the step (0 but for "partner")
     double a[3];        // the partner's attraction on the particle (0 without a partner)
     double mu;          // G (m_i + m_partner), 0 without a partner
-    double stiffness;   // (m_i + m_partner)/r^3, what made the partner (0 without one)
     size_t partner;     // SIZE_MAX: none (no other body attracts it)
 };
 // The centre's displacement and velocity t after the step's start (component k).
@@ -320,17 +402,14 @@ static inline double pfvi_centre_shift(const struct pfvi_centre* c, double t, in
 static inline double pfvi_centre_velocity(const struct pfvi_centre* c, double t, int k){
     return c->v[k] + t*c->acc[k];
 }
-// The centres of N particles of masses p[i].m at the step's start. A
-// partner is the body j != i (j < N_active) of largest G (m_i + m_j) / |x_j - x_i|^3,
-// the tightest pair i is in; with gravity off, G = 0 or no other massive
-// body a particle has none, and its centre is the origin (an external
-// field is given in the simulation frame). `need_partner`: find partners
-// (the centre "partner", the frequency "mean-motion").
+// The centres of N particles of masses p[i].m at the step's start, with
+// the partners of pfvi_partner_search (NULL: none needed, every partner
+// is none): with the centre "partner" the barycentre of the particle and
+// its partner, with "barycentre" that of the attracting bodies, otherwise
+// (and where a particle has no partner) the origin. An external field is
+// given in the simulation frame.
 PFVI_INTERNAL void pfvi_centres(const struct reb_particle* p, const struct pfvi_end_state* start, size_t N,
-        size_t N_active, double G, int centre, int need_partner, struct pfvi_centre* c);
-// Inspection (tests): each particle's partner in the simulation as it stands
-// (out[i] = N: none); 0 if memory ran out.
-PFVI_API int pfvi_partners(const struct reb_simulation* r, size_t* out);
+        size_t N_active, double G, int centre, const struct pfvi_partner* partners, struct pfvi_centre* c);
 // The frequency a step fits a particle to (before limiting), from its
 // position and velocity relative to its centre, d and w, and the
 // acceleration the model refers to: with the centre "partner", the
@@ -340,14 +419,6 @@ PFVI_API int pfvi_partners(const struct reb_simulation* r, size_t* out);
 // "radial" (about a partner G (m + m_partner)/r^3: -omega^2 d is then the
 // partner's whole attraction), the osculating mean motion about the partner
 // for "mean-motion" (0 if unbound or without a partner).
-// The step density of the symmetric step control at the particles p (with
-// the accelerations of `start`, or p's own if NULL) and the partners of c:
-// sigma = (sum_i sigma_i^K)^(1/K) over particles with a partner, sigma_i =
-// omega_i (1 - e_i^2)^(-gamma) with omega_i^2 = mu_i/r_i^3 and e_i the pair's
-// osculating eccentricity, and its logarithmic time derivative
-// d log(sigma)/dt. Returns 0 (sigma = 0) if no particle has a partner.
-PFVI_INTERNAL int pfvi_density(const struct reb_particle* p, const struct pfvi_end_state* start,
-        const struct pfvi_centre* c, size_t N, double gamma, double* sigma, double* dlog_sigma);
 PFVI_INTERNAL double pfvi_frequency(const struct pfvi_options* o, const struct reb_particle* p,
         const struct reb_particle* partner, const struct pfvi_centre* c, const double a[3]);
 
@@ -357,6 +428,7 @@ struct pfvi_statistics {
     uint64_t n_iterations;
     uint64_t iterations_max;
     double iterations_mean;
+    double epsilon_effective;      // the epsilon the symmetric control used (epsilon within its range)
     uint64_t n_u_limited;
     uint64_t n_force_evaluations;
     double omega_min;
@@ -364,6 +436,7 @@ struct pfvi_statistics {
     uint64_t n_rejected;
     uint64_t n_attempts;
     uint64_t n_asymmetric;
+    uint64_t n_unresolved;         // symmetric steps whose forces no shorter step resolved better
     double error_estimate;         // the step control's estimate for the last step taken
 };
 
@@ -445,9 +518,28 @@ struct pfvi_state {
     // equation; the symmetric step's density rho of the last step and the
     // direction it was taken in (rho = 0: start afresh).
     double dt_reversible;
+    // The symmetric track: the density rho of the current interval between
+    // two grid points (0: no track), the direction of the last step, how far
+    // into the interval it ended (track_done, from the end it entered at;
+    // track_at_end: at the far grid point), the kappa it was made with, the
+    // scale lambda >= 1 of the density (raised where the stages showed a
+    // time scale the density missed), the last r->dt proposed and the last
+    // step no cap shortened (REBOUND restores sim.dt to it after an exact
+    // finish: neither is taken as a cap).
     double rho;
     double rho_sign;
-    double dt_proposed;            // the r->dt the symmetric step last proposed
+    double dt_proposed;
+    double track_done;
+    int track_at_end;
+    double track_kappa;
+    double density_scale;
+    double dt_last_full;
+    // The density at the end of the last step (and its partners), the next
+    // step's start density if that step starts there (density_N > 0).
+    size_t density_N;
+    int density_stages;
+    double density_sigma;
+    double density_dlog;
     struct pfvi_trial_record trial;
     struct pfvi_fault fault;
 
@@ -469,6 +561,9 @@ struct pfvi_state {
     // circles at its start.
     double* omega_fit;
     struct pfvi_centre* centre;    // each particle's centre in this step
+    struct pfvi_partner* partners; // each particle's partner at the step's start (time scales, centres)
+    struct reb_vec6d* images;      // the ghost boxes' shifts (pfvi_field_of)
+    size_t images_allocated;
     double* omega_end;
     struct pfvi_osculating* osculating_start;
     // The s-stage solve: quadrature, per-particle fits, stage accelerations
@@ -533,10 +628,21 @@ PFVI_INTERNAL int pfvi_particle_finite(const struct reb_particle* p);
 PFVI_INTERNAL size_t pfvi_first_not_finite(const struct reb_particle* ps, size_t N);
 // Whether the particles, N, t and the force model are, bit for bit, those the last step ended with.
 PFVI_INTERNAL int pfvi_end_is_start(const struct reb_simulation* r, const struct pfvi_state* st);
+// Whether the particles, N, t and the force model are those the last step
+// ended with, whatever happened between (a synchronize, a new integrate()).
+PFVI_INTERNAL int pfvi_state_is_end(const struct reb_simulation* r, const struct pfvi_state* st);
 // Keeps the end of the step just taken as the next step's start (force reuse).
 PFVI_INTERNAL void pfvi_keep_end(const struct reb_simulation* r, struct pfvi_state* st, size_t N);
 // Drops what particles edited since the last step carried (compensation, predictor).
 PFVI_INTERNAL void pfvi_forget_edited(const struct reb_simulation* r, struct pfvi_state* st);
+// The field the time scales see (struct pfvi_field): REBOUND's G (0 with
+// gravity off), softening, N_active and its ghost boxes at r->t (in st's
+// scratch); 0 (fault recorded) if memory ran out.
+PFVI_INTERNAL int pfvi_field_of(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_field* f);
+// The number of ghost boxes REBOUND sums over, and their shifts at r->t
+// into images (room for that many), in the order of pfvi_field.
+PFVI_INTERNAL size_t pfvi_ghost_box_count(const struct reb_simulation* r);
+PFVI_INTERNAL void pfvi_ghost_boxes(struct reb_simulation* r, struct reb_vec6d* images);
 // Puts every particle (all fields) and t back to the start of the step.
 PFVI_INTERNAL void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0);
 // Evaluates forces through REBOUND; 0 (rolled back, fault recorded) if they
@@ -571,6 +677,9 @@ struct pfvi_scheme {
     // Moves the particles to the step's end; on failure rolled back.
     enum pfvi_trial (*advance)(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h);
     void (*commit)(struct reb_simulation* r, struct pfvi_state* st, size_t N, double h);
+    // After a trial: the accelerations of particle i at the step's s nodes.
+    void (*stage_accelerations)(const struct reb_simulation* r, const struct pfvi_state* st, size_t i,
+            double (*a)[3]);
 };
 PFVI_INTERNAL extern const struct pfvi_scheme pfvi_two_point_scheme;  // pfvi_two_point.c
 PFVI_INTERNAL extern const struct pfvi_scheme pfvi_stages_scheme;     // pfvi_stages.c
@@ -578,6 +687,9 @@ PFVI_INTERNAL extern const struct pfvi_scheme pfvi_stages_scheme;     // pfvi_st
 // pfvi_step.c: one trial step of the scheme for the current stages, its commit.
 PFVI_INTERNAL enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h);
 PFVI_INTERNAL void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double h);
+// How well the trial just made resolves the forces: the largest
+// pfvi_stage_resolution over the particles.
+PFVI_INTERNAL double pfvi_trial_resolution(const struct reb_simulation* r, const struct pfvi_state* st, size_t N);
 
 
 /* ---------------------------------------------------------- step control */

@@ -39,7 +39,7 @@ static double vector_scale(const double x[3]){
 }
 
 void pfvi_centres(const struct reb_particle* p, const struct pfvi_end_state* start, size_t N,
-        size_t N_active, double G, int centre, int need_partner, struct pfvi_centre* c){
+        size_t N_active, double G, int centre, const struct pfvi_partner* partners, struct pfvi_centre* c){
     const size_t n_attracting = (N_active < N) ? N_active : N;
     // The barycentre of the attracting bodies, for the centre "barycentre".
     double M = 0., X[3] = {0., 0., 0.}, V[3] = {0., 0., 0.};
@@ -53,40 +53,9 @@ void pfvi_centres(const struct reb_particle* p, const struct pfvi_end_state* sta
     }
     const int barycentre = (centre == PFVI_CENTRE_BARYCENTRE && M > 0. && isfinite(M));
     for (size_t i=0; i<N; i++){
-        c[i] = (struct pfvi_centre){{0., 0., 0.}, {0., 0., 0.}, {0., 0., 0.}, {0., 0., 0.}, 0., 0., SIZE_MAX};
-    }
-    if (need_partner && G > 0.){
-        // A pair's stiffness (m_i + m_j)/r^3 is the same for both bodies,
-        // so each pair is measured once, when the outer loop reaches the
-        // later body of the two. Each body still meets its candidates in
-        // increasing index, and the first of equal stiffnesses wins.
-        for (size_t i=0; i<N; i++){
-            const int i_attracts = (i < n_attracting && p[i].m > 0.);
-            const size_t before = (i < n_attracting) ? i : n_attracting;
-            for (size_t j=0; j<before; j++){
-                const int j_attracts = (p[j].m > 0.);
-                if (!(i_attracts || j_attracts)){
-                    continue;
-                }
-                const double dx = p[j].x - p[i].x, dy = p[j].y - p[i].y, dz = p[j].z - p[i].z;
-                const double r2 = dx*dx + dy*dy + dz*dz;
-                const double m = p[i].m + p[j].m;
-                // m / r^3 compared as (m / r^3)^2 = m^2 / r^6 would
-                // overflow sooner; m / (r2 sqrt(r2)) is monotonic in it.
-                const double stiffness = m/(r2*sqrt(r2));
-                if (j_attracts && stiffness > c[i].stiffness){
-                    c[i].stiffness = stiffness;
-                    c[i].partner = j;
-                }
-                if (i_attracts && stiffness > c[j].stiffness){
-                    c[j].stiffness = stiffness;
-                    c[j].partner = i;
-                }
-            }
-        }
-    }
-    for (size_t i=0; i<N; i++){
         struct pfvi_centre* const ci = &c[i];
+        *ci = (struct pfvi_centre){{0., 0., 0.}, {0., 0., 0.}, {0., 0., 0.}, {0., 0., 0.}, 0., SIZE_MAX};
+        ci->partner = partners ? partners[i].j : SIZE_MAX;
         if (ci->partner != SIZE_MAX){
             const struct reb_particle* const q = &p[ci->partner];
             const double dx = q->x - p[i].x, dy = q->y - p[i].y, dz = q->z - p[i].z;
@@ -123,21 +92,6 @@ void pfvi_centres(const struct reb_particle* p, const struct pfvi_end_state* sta
             ci->acc[2] = fi*ai[2] + fj*aj[2];
         }
     }
-}
-
-int pfvi_partners(const struct reb_simulation* r, size_t* out){
-    const size_t N = r->N;
-    struct pfvi_centre* const c = malloc((N ? N : 1)*sizeof(*c));
-    if (!c){
-        return 0;
-    }
-    const double G = (r->gravity == REB_GRAVITY_NONE) ? 0. : r->G;
-    pfvi_centres(r->particles, NULL, N, r->N_active, G, PFVI_CENTRE_ORIGIN, 1, c);
-    for (size_t i=0; i<N; i++){
-        out[i] = (c[i].partner == SIZE_MAX) ? N : c[i].partner;
-    }
-    free(c);
-    return 1;
 }
 
 // sqrt(max(0, -a.d)/|d|^2), with d scaled before squaring.
@@ -195,88 +149,4 @@ double pfvi_frequency(const struct pfvi_options* o, const struct reb_particle* p
             return pfvi_curvature_frequency(w, a);
         }
     }
-}
-
-// One pair's contribution to the step density: omega (mu/r^3)^(1/2) times
-// (1 - e^2)^(-gamma) (e: the pair's osculating eccentricity, capped), and the
-// time derivative of its logarithm, -3/2 (r.v)/r^2 + gamma d(e^2)/dt/(1 - e^2)
-// with d(e^2)/dt from the acceleration beyond the pair's own pull (zero for
-// an isolated pair). Returns 0 where omega is not a finite positive number.
-static int pair_density(const double r[3], const double v[3], const double a_rel[3], double mu, double gamma,
-        double* sigma, double* dlog){
-    const double r2 = r[0]*r[0] + r[1]*r[1] + r[2]*r[2];
-    const double rn = sqrt(r2);
-    const double omega = sqrt(mu/(r2*rn));
-    if (!(omega > 0.) || !isfinite(omega)){
-        return 0;
-    }
-    const double rv = r[0]*v[0] + r[1]*v[1] + r[2]*v[2];
-    const double v2 = v[0]*v[0] + v[1]*v[1] + v[2]*v[2];
-    double ev[3], de[3], pert[3];
-    for (int k=0; k<3; k++){
-        pert[k] = a_rel[k] + mu*r[k]/(r2*rn);   // beyond the pair's pull
-    }
-    const double vp = v[0]*pert[0] + v[1]*pert[1] + v[2]*pert[2];
-    const double rp = r[0]*pert[0] + r[1]*pert[1] + r[2]*pert[2];
-    double e2 = 0., de2 = 0.;
-    for (int k=0; k<3; k++){
-        ev[k] = ((v2 - mu/rn)*r[k] - rv*v[k])/mu;
-        de[k] = (2.*vp*r[k] - rp*v[k] - rv*pert[k])/mu;
-        e2 += ev[k]*ev[k];
-        de2 += 2.*ev[k]*de[k];
-    }
-    double factor = 1., dlog_factor = 0.;
-    if (gamma > 0.){
-        const double bound = (e2 < PFVI_DENSITY_E2_MAX) ? 1. - e2 : 1. - PFVI_DENSITY_E2_MAX;
-        factor = pow(bound, -gamma);
-        dlog_factor = (e2 < PFVI_DENSITY_E2_MAX) ? gamma*de2/bound : 0.;
-    }
-    *sigma = omega*factor;
-    *dlog = -1.5*rv/r2 + dlog_factor;
-    return isfinite(*sigma) && isfinite(*dlog);
-}
-
-int pfvi_density(const struct reb_particle* p, const struct pfvi_end_state* start, const struct pfvi_centre* c,
-        size_t N, double gamma, double* sigma, double* dlog_sigma){
-    // Per pair: sigma_i and its rate into scratch-free running sums, scaled by
-    // the largest sigma_i (found first) so that sigma_i^K cannot overflow.
-    double sigma_max = 0.;
-    for (int pass=0; pass<2; pass++){
-        double sum = 0., weighted = 0.;
-        for (size_t i=0; i<N; i++){
-            const size_t j = c[i].partner;
-            if (j == SIZE_MAX){
-                continue;
-            }
-            const double r[3] = {p[i].x - p[j].x, p[i].y - p[j].y, p[i].z - p[j].z};
-            const double v[3] = {p[i].vx - p[j].vx, p[i].vy - p[j].vy, p[i].vz - p[j].vz};
-            double a_rel[3];
-            for (int k=0; k<3; k++){
-                const double ai = start ? start[i].a[k] : (&p[i].ax)[k];
-                const double aj = start ? start[j].a[k] : (&p[j].ax)[k];
-                a_rel[k] = ai - aj;
-            }
-            double s_i, g_i;
-            if (!pair_density(r, v, a_rel, c[i].mu, gamma, &s_i, &g_i)){
-                continue;
-            }
-            if (pass == 0){
-                sigma_max = fmax(sigma_max, s_i);
-            }else{
-                const double w = pow(s_i/sigma_max, PFVI_DENSITY_NORM);
-                sum += w;
-                weighted += w*g_i;
-            }
-        }
-        if (pass == 0 && !(sigma_max > 0.)){
-            *sigma = 0.;
-            *dlog_sigma = 0.;
-            return 0;
-        }
-        if (pass == 1){
-            *sigma = sigma_max*pow(sum, 1./PFVI_DENSITY_NORM);
-            *dlog_sigma = weighted/sum;
-        }
-    }
-    return 1;
 }

@@ -255,106 +255,275 @@ static double control_reversible(struct reb_simulation* r, struct pfvi_state* st
     return h;
 }
 
+// The epsilon the symmetric control works to: the request, held within
+// what s stages can deliver (PFVI_EPSILON_FLOORS below, kappa's cap above).
+static double symmetric_epsilon(const struct pfvi_options* o){
+    static const double constant[PFVI_STAGES_MAX + 1] = PFVI_SYMMETRIC_CONSTANTS;
+    static const double floor_[PFVI_STAGES_MAX + 1] = PFVI_EPSILON_FLOORS;
+    const double top = constant[o->stages]*pow(PFVI_KAPPA_MAX, 2.*o->stages - 2.);
+    return fmin(fmax(o->epsilon, floor_[o->stages]), top);
+}
+
 // kappa = (epsilon/C_s)^(1/(2s - 2)): the step in units of 1/sigma.
 static double symmetric_kappa(const struct pfvi_options* o){
     static const double constant[PFVI_STAGES_MAX + 1] = PFVI_SYMMETRIC_CONSTANTS;
-    const double kappa = pow(o->epsilon/constant[o->stages], 1./(2.*o->stages - 2.));
-    return fmin(kappa, PFVI_KAPPA_MAX);
+    return pow(symmetric_epsilon(o)/constant[o->stages], 1./(2.*o->stages - 2.));
 }
 
-// gamma_s of the eccentricity factor: the error per orbit at fixed kappa grows
-// like (1 - e)^(-beta_s); (1 - e^2)^(-beta_s/(2s - 2)) in sigma evens it out.
-static double symmetric_gamma(const struct pfvi_options* o){
-    static const double beta[PFVI_STAGES_MAX + 1] = PFVI_SYMMETRIC_BETA;
-    return beta[o->stages]/(2.*o->stages - 2.);
+// (s - 1)!: u = ((s - 1)! |D|/A)^(1/(s - 1)) is h nu for an acceleration
+// that varies like cos(nu t) (its Taylor term of degree s - 1).
+static double factorial(int n){
+    double f = 1.;
+    for (int k=2; k<=n; k++){
+        f *= k;
+    }
+    return f;
+}
+
+// The resolution u of a trial step (pfvi.h, PFVI_RESOLUTION_CONSTANTS).
+static double symmetric_resolution(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
+    const int s = st->options.stages;
+    return pow(factorial(s - 1)*pfvi_trial_resolution(r, st, N), 1./(s - 1.));
+}
+
+// Where a symmetric step starts on the track (struct pfvi_state): the
+// density rho of the interval it lies in, the interval's length kappa/rho,
+// and what of it remains in the step's direction.
+struct track_position {
+    double rho;
+    double length;
+    double done;        // from the end the step entered the interval at
+    double remaining;
+};
+
+// Whether the saved track belongs to this kappa (a changed epsilon or s, or
+// particles edited or added since, start it afresh).
+static int symmetric_on_track(const struct pfvi_state* st, double kappa){
+    return st->rho > 0. && isfinite(st->rho) && st->track_kappa == kappa
+        && (st->rho_sign == 1. || st->rho_sign == -1.);
+}
+
+// The track at a step in direction `sign` from a state of density sigma and
+// rate g: a retrace on a reversal, the rest of an interval a capped step
+// left, the next interval (the Hairer & Soderlind update), or a fresh start.
+static struct track_position symmetric_position(const struct pfvi_state* st, double sign, double kappa,
+        double sigma, double g){
+    struct track_position t = {0., 0., 0., 0.};
+    const int track = symmetric_on_track(st, kappa);
+    if (track && sign != st->rho_sign){
+        // Reversed: back over what the last steps went of this interval.
+        t.rho = st->rho;
+        t.length = kappa/t.rho;
+        t.remaining = st->track_at_end ? t.length : st->track_done;
+        t.done = st->track_at_end ? 0. : t.length - st->track_done;
+        return t;
+    }
+    if (track && !st->track_at_end){
+        t.rho = st->rho;
+        t.length = kappa/t.rho;
+        t.done = st->track_done;
+        t.remaining = t.length - t.done;
+        if (t.remaining > 0.){
+            return t;
+        }
+    }
+    if (track){
+        t.rho = st->rho + sign*kappa*g;
+    }
+    if (!(t.rho > 0.) || !isfinite(t.rho)){
+        const double scaled = st->density_scale*sigma;
+        t.rho = scaled + 0.5*sign*kappa*g;
+        t.rho = (t.rho > 0. && isfinite(t.rho)) ? t.rho : scaled;
+    }
+    t.length = kappa/t.rho;
+    t.done = 0.;
+    t.remaining = t.length;
+    return t;
 }
 
 // The symmetric step (Hairer & Soderlind 2005, SIAM J. Sci. Comput. 26,
-// 1838): h_n = kappa/rho_n+1/2 with
+// 1838): the grid of the run has intervals h_n = kappa/rho_n+1/2 with
 //     rho_n+1/2 = rho_n-1/2 + kappa G(y_n),   G = d log(sigma)/dt,
 // an explicit update that is the same read forward or backward, so that rho
-// tracks the density sigma of pfvi_density along the orbit and the sequence
-// of steps reverses exactly. One stage solve per step; a solve that does not
-// converge is retried at half the step (counted in n_rejected and
-// n_asymmetric), as is a step at whose end the density exceeds
-// PFVI_DENSITY_JUMP_MAX/h (kappa/h is the density it was sized for): along a
-// Kepler orbit sigma/rho stays within 0.76-1.35 (e = 0.9, the largest
-// steps), but a close approach of a third body raises the density within
-// one step by 10^3 in Burrau's problem. Without pairs (no gravity, or no
-// massive body) the steps are sim.dt.
+// tracks lambda sigma (pfvi_step_density; lambda = density_scale, 1 unless
+// a check below raised it) along the orbit and the steps reverse exactly,
+// as long as sigma changes by less than itself over a step (the density's
+// terms are built so: pfvi_timescales.c). One stage solve per step.
 //
-// sim.dt is the step proposed after each step. If it is still that (or only
-// its sign was flipped: REBOUND integrating back to a time it overshot, or
-// the user reversing), the step is kappa/rho; if it was changed (REBOUND
-// shortening the last step to finish on time, or the user), it caps the
-// step, and a capped step ends the track: rho starts afresh from sigma at
-// the next step, since it no longer belongs to the state it arrives at.
-// rho for a step in direction `sign` from a state of density sigma and rate
-// g, after a last step taken with rho_last in direction sign_last (rho_last
-// = 0: none): the track continued, a reversal retracing that step, or a
-// fresh start from sigma. The step's start and the proposal at the end of
-// the last step both use it, so that they agree.
-static double symmetric_rho(double rho_last, double sign_last, double sign, double kappa, double sigma, double g){
-    double rho = 0.;
-    if (rho_last > 0.){
-        rho = (sign_last == sign) ? rho_last + sign*kappa*g : rho_last;
-    }
-    if (!(rho > 0.) || !isfinite(rho)){
-        rho = sigma + 0.5*sign*kappa*g;
-        rho = (rho > 0.) ? rho : sigma;
-    }
-    return rho;
-}
-
+// sim.dt is the step proposed after each step (the rest of the interval,
+// or the next interval). A different value (REBOUND shortening a step to
+// finish on time, a sampling time, or the user) caps the step: the interval
+// is then crossed in more than one step and the track goes on, so that a
+// reversal retraces the capped step exactly before it retraces the
+// intervals. On the track, the value REBOUND restores after an exact finish
+// (the last full step) is not a cap either; off it (a first step, or
+// particles edited or added) sim.dt caps the step unless it is REBOUND's
+// default and pfvi never proposed one.
+//
+// Checks, each retaking the step shorter (n_rejected; the step is then not
+// time-symmetric, n_asymmetric):
+//  - the stage solve did not converge: half the step (the interval goes on);
+//  - the density at either end exceeds PFVI_DENSITY_JUMP_MAX/h (a close
+//    approach the track could not foresee): half the step, and the track
+//    starts afresh after it;
+//  - the stages resolve the forces worse than any Kepler orbit does at this
+//    kappa (the error they imply above PFVI_RESOLUTION_MAX times the worst
+//    there: a time scale the density misses): retaken at the step that
+//    resolves them, and lambda raised by the factor that took. Where a
+//    shorter step does not resolve them better (a force that jumps within a
+//    step: a tree code's cells) the step is kept as it is, lambda is left
+//    alone and the step counted in n_unresolved.
+// Lambda falls back towards 1 where whole intervals resolve the forces
+// PFVI_RESOLUTION_SLACK times finer than needed (n_asymmetric). Without
+// pairs (no gravity, or no massive body) the steps are sim.dt.
 static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
+    static const double resolution_constant[PFVI_STAGES_MAX + 1] = PFVI_RESOLUTION_CONSTANTS;
+    const struct pfvi_options* const o = &st->options;
     const double sign = copysign(1., r->dt);
-    const int proposed = (st->rho > 0. && fabs(r->dt) == fabs(st->dt_proposed));
-    const double cap = proposed ? INFINITY : fabs(r->dt);
-    const double kappa = symmetric_kappa(&st->options);
-    double sigma, g;
-    const double gamma = symmetric_gamma(&st->options);
-    const int paired = pfvi_density(st->start, st->end, st->centre, N, gamma, &sigma, &g);
-    const double rho = paired ? symmetric_rho(st->rho, st->rho_sign, sign, kappa, sigma, g) : 0.;
-    double h = paired ? fmin(kappa/rho, cap) : fabs(r->dt);  // without pairs: sim.dt
-    double sigma1 = 0., g1 = 0.;
+    const double kappa = symmetric_kappa(o);
+    const double u_target = resolution_constant[o->stages]*kappa;
+    const double sigma0 = st->density_sigma, g0 = st->density_dlog;
+    st->statistics.epsilon_effective = symmetric_epsilon(o);
+    if (!(sigma0 > 0.)){
+        // Without pairs: steps of sim.dt (halved where the solve does not
+        // converge), no track.
+        double h = sign*fabs(r->dt);
+        for (;;){
+            const enum pfvi_trial trial = pfvi_trial_step(r, st, N, t0, h);
+            if (trial == PFVI_TRIAL_ERROR){
+                return 0.;
+            }
+            if (trial == PFVI_TRIAL_OK){
+                break;
+            }
+            st->statistics.n_rejected++;
+            st->statistics.n_asymmetric++;
+            h *= 0.5;
+            if (t0 + h == t0){
+                st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_NOT_CONVERGED, .n = (size_t)o->stages,
+                    .value = st->trial.change, .rounds = st->trial.rounds, .t0 = t0};
+                return 0.;
+            }
+        }
+        pfvi_commit_step(r, st, N, h);
+        st->rho = 0.;
+        st->statistics.error_estimate = 0.;
+        return h;
+    }
+    struct track_position t = symmetric_position(st, sign, kappa, sigma0, g0);
+    const double dt = fabs(r->dt);
+    const int uncapped = (symmetric_on_track(st, kappa) && (dt == fabs(st->dt_proposed) || dt == fabs(st->dt_last_full)))
+        || (st->dt_proposed == 0. && dt == PFVI_REBOUND_DT_DEFAULT);
+    const double cap = uncapped ? INFINITY : dt;
+    double h = fmin(t.remaining, cap);
+    const double lambda0 = st->density_scale;
+    double lambda = lambda0;
+    double sigma1 = 0., g1 = 0., u = 0., u_last = 0., h_last = 0.;
+    int restart = 0, shortened = 0, retakes = 0, unresolved = 0;
+    struct pfvi_field field;
     for (;;){
         const enum pfvi_trial trial = pfvi_trial_step(r, st, N, t0, sign*h);
         if (trial == PFVI_TRIAL_ERROR){
             return 0.;
         }
+        double h_next = 0.5*h;
         if (trial == PFVI_TRIAL_OK){
-            // The density where the step ended: a step that ran into a much
-            // denser region (a close approach the track could not foresee,
-            // as in Burrau's problem) is retried shorter.
-            if (!paired){
-                break;
+            if (!pfvi_field_of(r, st, &field)){
+                pfvi_roll_back(r, st, N, t0);
+                return 0.;
             }
-            pfvi_density(r->particles, NULL, st->centre, N, gamma, &sigma1, &g1);
-            if (!(sigma1*h > PFVI_DENSITY_JUMP_MAX*kappa)){
+            pfvi_step_density(r->particles, NULL, N, &field, o->stages, st->partners, &sigma1, &g1);
+            u = symmetric_resolution(r, st, N);
+            // (Both ends: a reversed step makes the same check.)
+            const int jump = fmax(sigma0, sigma1)*lambda*h > PFVI_DENSITY_JUMP_MAX*kappa;
+            // The error the stages imply, relative to the worst along
+            // Kepler orbits (about epsilon per orbit there).
+            const int coarse = pow(u/u_target, 2.*o->stages - 2.) > PFVI_RESOLUTION_MAX;
+            // A shorter step that did not resolve them better (u falls about
+            // in proportion to h where they can be resolved): they cannot be.
+            const int no_better = retakes > 0 && u > 0.5*(u_last + u_last*h/h_last);
+            unresolved = coarse && (retakes == PFVI_RESOLUTION_RETRIES || no_better);
+            if (!jump && (!coarse || unresolved)){
                 break;
             }
             pfvi_roll_back(r, st, N, t0);
+            if (jump){
+                restart = 1;
+            }else{
+                // The step that resolves the forces as the density should
+                // have: the interval starts afresh here, lambda times denser.
+                retakes++;
+                u_last = u;
+                h_last = h;
+                const double scale = 1./fmin(0.8, u_target/u);
+                lambda *= scale;
+                t.rho *= scale;
+                t.length = kappa/t.rho;
+                t.done = 0.;
+                t.remaining = t.length;
+                h_next = fmin(t.remaining, cap);
+            }
         }
         st->statistics.n_rejected++;
-        st->statistics.n_asymmetric++;
-        h *= 0.5;
+        shortened = 1;
+        h = h_next;
         if (t0 + sign*h == t0){
-            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_NOT_CONVERGED, .n = (size_t)st->options.stages,
+            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_NOT_CONVERGED, .n = (size_t)o->stages,
                 .value = st->trial.change, .rounds = st->trial.rounds, .t0 = t0};
             return 0.;
         }
     }
     h *= sign;
     pfvi_commit_step(r, st, N, h);
-    st->statistics.error_estimate = 0.;
-    // A step shorter than kappa/rho (capped or halved) ends the track.
-    st->rho = (paired && fabs(h) == kappa/rho) ? rho : 0.;
-    st->rho_sign = sign;
-    if (paired){
-        // Propose exactly the next step, so that REBOUND shortens it only to
-        // finish on time; the next step's start recomputes it the same way.
-        r->dt = sign*kappa/symmetric_rho(st->rho, sign, sign, kappa, sigma1, g1);
-        st->dt_proposed = r->dt;
+    int asymmetric = shortened;
+    if (unresolved){
+        // Shorter steps did not help: the density was right, keep its scale.
+        st->statistics.n_unresolved++;
+        t.rho *= lambda0/lambda;
+        t.length = kappa/t.rho;
+        t.remaining = t.length;
+        lambda = lambda0;
+    }
+    {
+        // The stages' estimate, as the error per orbit a step of this
+        // resolution makes where it is worst on a Kepler orbit.
+        static const double constant[PFVI_STAGES_MAX + 1] = PFVI_SYMMETRIC_CONSTANTS;
+        st->statistics.error_estimate = constant[o->stages]*pow(u/resolution_constant[o->stages], 2.*o->stages - 2.);
+    }
+    // Where the track now stands.
+    const double step = fabs(h);
+    const int full = (step == t.remaining);
+    if (restart){
+        st->rho = 0.;
+    }else{
+        st->rho = t.rho;
+        st->rho_sign = sign;
+        st->track_kappa = kappa;
+        st->track_at_end = full;
+        st->track_done = full ? t.length : t.done + step;
+        // Lambda falls back where a whole interval resolved the forces
+        // finer than needed (never below 1: the density's own steps).
+        if (full && lambda > 1. && u*PFVI_RESOLUTION_SLACK < u_target){
+            const double scale = fmax(1./lambda, PFVI_RESOLUTION_SLACK*u/u_target);
+            lambda *= scale;
+            st->rho *= scale;
+            st->track_done = kappa/st->rho;
+            asymmetric = 1;
+        }
+    }
+    st->density_scale = lambda;
+    st->statistics.n_asymmetric += (uint64_t)asymmetric;
+    // The density at the end is the next step's start density.
+    st->density_sigma = sigma1;
+    st->density_dlog = g1;
+    st->density_N = N;
+    st->density_stages = o->stages;
+    // Propose exactly the next step, so that REBOUND shortens it only to
+    // finish on time; the next step recomputes it the same way.
+    r->dt = sign*symmetric_position(st, sign, kappa, sigma1, g1).remaining;
+    st->dt_proposed = r->dt;
+    if (!shortened && t.remaining <= cap){
+        st->dt_last_full = h;
     }
     return h;
 }

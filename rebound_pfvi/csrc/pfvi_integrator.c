@@ -191,6 +191,11 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "rho", offsetof(struct pfvi_state, rho), 0, 0, 0 },
     { "", REB_DOUBLE, "rho_sign", offsetof(struct pfvi_state, rho_sign), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_proposed", offsetof(struct pfvi_state, dt_proposed), 0, 0, 0 },
+    { "", REB_DOUBLE, "track_done", offsetof(struct pfvi_state, track_done), 0, 0, 0 },
+    { "", REB_INT, "track_at_end", offsetof(struct pfvi_state, track_at_end), 0, 0, 0 },
+    { "", REB_DOUBLE, "track_kappa", offsetof(struct pfvi_state, track_kappa), 0, 0, 0 },
+    { "", REB_DOUBLE, "density_scale", offsetof(struct pfvi_state, density_scale), 0, 0, 0 },
+    { "", REB_DOUBLE, "dt_last_full", offsetof(struct pfvi_state, dt_last_full), 0, 0, 0 },
     { "", REB_INT, "predictor_stages", offsetof(struct pfvi_state, predictor_stages), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_h", offsetof(struct pfvi_state, predictor_h), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_t", offsetof(struct pfvi_state, predictor_t), 0, 0, 0 },
@@ -211,6 +216,9 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         REB_UINT64, iterations_max),
     PFVI_STATISTIC("n_iterations / n_steps.",
         REB_DOUBLE, iterations_mean),
+    PFVI_STATISTIC("the epsilon the symmetric step control used for the last step: epsilon held "
+        "within what the stages can deliver (0 before a symmetric step).",
+        REB_DOUBLE, epsilon_effective),
     PFVI_STATISTIC("steps tried and rejected by the step control (or whose stage "
         "solve did not converge and was retried shorter).", REB_UINT64, n_rejected),
     PFVI_STATISTIC("trial steps, taken or not (the work done: n_attempts / n_steps per step).",
@@ -220,8 +228,14 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "steps whose step equation was not solved in " PFVI_STR(PFVI_REVERSIBLE_MAX_TRIALS) " trial "
         "steps and that were taken at the largest step tried meeting epsilon.",
         REB_UINT64, n_asymmetric),
-    PFVI_STATISTIC("the step control's error estimate for the last step taken "
-        "(0 with fixed steps).", REB_DOUBLE, error_estimate),
+    PFVI_STATISTIC("symmetric steps kept although their stages showed forces that a shorter "
+        "step did not resolve better (forces that jump within a step, as a tree code's cells do); "
+        "their error is not bounded by epsilon.", REB_UINT64, n_unresolved),
+    PFVI_STATISTIC("the step control's error estimate for the last step taken (0 with fixed "
+        "steps). 'symmetric': from the stage accelerations, the error per orbit that a step "
+        "resolving the forces this well makes where Kepler orbits are resolved worst: at most "
+        "about epsilon_effective where the density sees every time scale.",
+        REB_DOUBLE, error_estimate),
     PFVI_STATISTIC("smallest omega used in the last step (after limiting).",
         REB_DOUBLE, omega_min),
     PFVI_STATISTIC("largest omega used in the last step (after limiting).",
@@ -244,6 +258,8 @@ static void* pfvi_create(void){
         .step_control = PFVI_STEP_CONTROL_SYMMETRIC,
         .centre = PFVI_CENTRE_PARTNER,
     };
+    st->density_scale = 1.;
+    st->track_at_end = 1;
     return st;
 }
 
@@ -462,6 +478,9 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
         }
         pfvi_forget_edited(r, st);
     }
+    // The density the last step found at its end holds here if the state,
+    // the force model and the accelerations are that end's, bit for bit.
+    int density_holds = st->density_N == N && st->density_stages == st->options.stages && pfvi_state_is_end(r, st);
     st->cache_N = 0;
     memcpy(st->start, ps, N*sizeof(struct reb_particle));
     if (!reuse){
@@ -470,16 +489,37 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
             return 0;
         }
         for (size_t i=0; i<N; i++){
+            density_holds &= (e[i].a[0] == ps[i].ax) & (e[i].a[1] == ps[i].ay) & (e[i].a[2] == ps[i].az);
             e[i].a[0] = ps[i].ax; e[i].a[1] = ps[i].ay; e[i].a[2] = ps[i].az;
         }
     }
     const struct reb_particle* const p0 = st->start;
     const struct pfvi_options* const o = &st->options;
     const int fitted = (o->fitting != PFVI_FITTING_NONE);
-    const int need_partner = (fitted && (o->centre == PFVI_CENTRE_PARTNER || o->frequency == PFVI_FREQUENCY_MEAN_MOTION))
-        || (o->epsilon > 0. && o->step_control == PFVI_STEP_CONTROL_SYMMETRIC);
+    const int symmetric = (o->epsilon > 0. && o->step_control == PFVI_STEP_CONTROL_SYMMETRIC);
+    const int need_partner = (fitted && (o->centre == PFVI_CENTRE_PARTNER || o->frequency == PFVI_FREQUENCY_MEAN_MOTION));
+    // The partners (and for the symmetric control the density) at the start:
+    // those the last step found at its end if this step starts there.
+    st->density_N = 0;  // valid again only once a symmetric step has found it at its end
+    if (!density_holds){
+        st->density_sigma = 0.;
+        st->density_dlog = 0.;
+        if (symmetric || need_partner){
+            struct pfvi_field field;
+            if (!pfvi_field_of(r, st, &field)){
+                pfvi_report(r, st);
+                return 0;
+            }
+            if (symmetric){
+                pfvi_step_density(p0, e, N, &field, o->stages, st->partners,
+                        &st->density_sigma, &st->density_dlog);
+            }else{
+                pfvi_partner_search(p0, N, &field, st->partners);
+            }
+        }
+    }
     pfvi_centres(p0, e, N, r->N_active, (r->gravity == REB_GRAVITY_NONE) ? 0. : r->G,
-            fitted ? o->centre : PFVI_CENTRE_ORIGIN, need_partner, st->centre);
+            fitted ? o->centre : PFVI_CENTRE_ORIGIN, need_partner ? st->partners : NULL, st->centre);
     for (size_t i=0; !fitted && i<N; i++){
         st->omega_fit[i] = 0.;
     }
@@ -604,6 +644,51 @@ const char* pfvi_option_value_name(const char* field, int i){
         }
     }
     return NULL;
+}
+
+int pfvi_partners(struct reb_simulation* r, size_t* out){
+    const size_t N = r->N;
+    const size_t n = pfvi_ghost_box_count(r);
+    struct pfvi_partner* const partners = malloc((N ? N : 1)*sizeof(*partners));
+    struct reb_vec6d* const images = malloc(n*sizeof(*images));
+    if (!partners || !images){
+        free(partners);
+        free(images);
+        return 0;
+    }
+    pfvi_ghost_boxes(r, images);
+    const struct pfvi_field field = {(r->gravity == REB_GRAVITY_NONE) ? 0. : r->G, r->softening*r->softening,
+        r->N_active, n, images};
+    pfvi_partner_search(r->particles, N, &field, partners);
+    for (size_t i=0; i<N; i++){
+        out[i] = (partners[i].j == SIZE_MAX) ? N : partners[i].j;
+    }
+    free(partners);
+    free(images);
+    return 1;
+}
+
+int pfvi_density_of(struct reb_simulation* r, int stages, double* out){
+    const size_t N = r->N;
+    if (stages < PFVI_STAGES_MIN || stages > PFVI_STAGES_MAX){
+        return 0;
+    }
+    const size_t n = pfvi_ghost_box_count(r);
+    struct pfvi_partner* const partners = malloc((N ? N : 1)*sizeof(*partners));
+    struct reb_vec6d* const images = malloc(n*sizeof(*images));
+    if (!partners || !images){
+        free(partners);
+        free(images);
+        return 0;
+    }
+    pfvi_ghost_boxes(r, images);
+    const struct pfvi_field field = {(r->gravity == REB_GRAVITY_NONE) ? 0. : r->G, r->softening*r->softening,
+        r->N_active, n, images};
+    reb_simulation_update_acceleration(r);
+    const int paired = pfvi_step_density(r->particles, NULL, N, &field, stages, partners, &out[0], &out[1]);
+    free(partners);
+    free(images);
+    return paired;
 }
 
 const char* pfvi_rebound_version_compiled(void){

@@ -186,9 +186,14 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
 static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
     const struct pfvi_lobatto* const rule = &st->rule;
     const int s = rule->s;
-    const int retry = st->retry_valid && st->retry_t0 == t0 && st->retry_stages == s && st->retry_h != 0.;
+    // Extrapolated over more than a few of the source's lengths (a step
+    // after a much shorter one) the polynomial leaves the plausible: the
+    // Taylor path of the start state then.
+    const double ratio_max = PFVI_PREDICTOR_RATIO_MAX;
+    const int retry = st->retry_valid && st->retry_t0 == t0 && st->retry_stages == s && st->retry_h != 0.
+        && fabs(h) <= ratio_max*fabs(st->retry_h);
     const int extrapolate = !retry && st->predictor_stages == s && st->predictor_N == N && st->predictor_t == t0
-        && st->predictor_h != 0.;
+        && st->predictor_h != 0. && fabs(h) <= ratio_max*fabs(st->predictor_h);
     double x[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
     if (retry || extrapolate){
         // x[j][m] = l_m(tau_j): the Lagrange basis of the source's nodes at
@@ -423,6 +428,16 @@ static void stages_commit(struct reb_simulation* r, struct pfvi_state* st, size_
     st->retry_valid = 0;  // stage_a now holds the predictor's old buffer
 }
 
+static void stages_stage_accelerations(const struct reb_simulation* r, const struct pfvi_state* st, size_t i,
+        double (*a)[3]){
+    (void)r;
+    for (int k=0; k<st->rule.s; k++){
+        for (int c=0; c<3; c++){
+            a[k][c] = st->stage_a[i][k][c];
+        }
+    }
+}
+
 const struct pfvi_scheme pfvi_stages_scheme = {
     .prepare = stages_prepare,
     .fit = stages_fit,
@@ -430,4 +445,5 @@ const struct pfvi_scheme pfvi_stages_scheme = {
     .fitted_omega = stages_fitted_omega,
     .advance = stages_advance,
     .commit = stages_commit,
+    .stage_accelerations = stages_stage_accelerations,
 };

@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "pfvi.h"
+#include "boundary.h"
 
 void pfvi_state_free(struct pfvi_state* st){
     free(st->start);
@@ -28,6 +29,8 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->predictor_x);
     free(st->omega_fit);
     free(st->centre);
+    free(st->partners);
+    free(st->images);
     free(st->omega_end);
     free(st->osculating_start);
     free(st->unknowns);
@@ -61,6 +64,8 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
         st->compensation = comp;
         st->N_compensation = N;
         st->rho = 0.;  // the symmetric step's density described the old particles
+        st->density_scale = 1.;
+        st->density_N = 0;
         st->end_N = 0;
     }
     if (N <= st->N_allocated){
@@ -81,6 +86,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->predictor_x = pfvi_grow(st->predictor_x, N*sizeof(*st->predictor_x), &ok);
     st->omega_fit = pfvi_grow(st->omega_fit, N*sizeof(*st->omega_fit), &ok);
     st->centre = pfvi_grow(st->centre, N*sizeof(*st->centre), &ok);
+    st->partners = pfvi_grow(st->partners, N*sizeof(*st->partners), &ok);
     st->omega_end = pfvi_grow(st->omega_end, N*sizeof(*st->omega_end), &ok);
     st->osculating_start = pfvi_grow(st->osculating_start, N*sizeof(*st->osculating_start), &ok);
     st->unknowns = pfvi_grow(st->unknowns, N*sizeof(*st->unknowns), &ok);
@@ -169,8 +175,12 @@ static int force_model_unchanged(const struct reb_simulation* r, const struct pf
 }
 
 int pfvi_end_is_start(const struct reb_simulation* r, const struct pfvi_state* st){
+    return st->cache_N == r->N && pfvi_state_is_end(r, st);
+}
+
+int pfvi_state_is_end(const struct reb_simulation* r, const struct pfvi_state* st){
     const size_t N = r->N;
-    if (st->cache_N != N || st->cache_t != r->t || !force_model_unchanged(r, &st->cache_model)){
+    if (st->end_N != N || st->cache_t != r->t || !force_model_unchanged(r, &st->cache_model)){
         return 0;
     }
     const struct reb_particle* const ps = r->particles;
@@ -216,7 +226,55 @@ void pfvi_forget_edited(const struct reb_simulation* r, struct pfvi_state* st){
     if (edited){
         st->predictor_stages = 0;
         st->rho = 0.;  // the symmetric step's density no longer describes them
+        st->density_scale = 1.;
+        st->density_N = 0;
     }
+}
+
+size_t pfvi_ghost_box_count(const struct reb_simulation* r){
+    const size_t nx = 2*(size_t)(r->N_ghost_x > 0 ? r->N_ghost_x : 0) + 1;
+    const size_t ny = 2*(size_t)(r->N_ghost_y > 0 ? r->N_ghost_y : 0) + 1;
+    const size_t nz = 2*(size_t)(r->N_ghost_z > 0 ? r->N_ghost_z : 0) + 1;
+    return nx*ny*nz;
+}
+
+void pfvi_ghost_boxes(struct reb_simulation* r, struct reb_vec6d* images){
+    if (pfvi_ghost_box_count(r) == 1){
+        images[0] = (struct reb_vec6d){0., 0., 0., 0., 0., 0.};
+        return;
+    }
+    // REBOUND's own boxes, in lexicographic order from (-N_x, -N_y, -N_z):
+    // image n - 1 - g is the mirror of image g.
+    size_t g = 0;
+    for (int i=-r->N_ghost_x; i<=r->N_ghost_x; i++){
+        for (int j=-r->N_ghost_y; j<=r->N_ghost_y; j++){
+            for (int k=-r->N_ghost_z; k<=r->N_ghost_z; k++){
+                images[g++] = reb_boundary_get_ghostbox(r, i, j, k);
+            }
+        }
+    }
+}
+
+int pfvi_field_of(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_field* f){
+    const size_t n = pfvi_ghost_box_count(r);
+    if (n > st->images_allocated){
+        struct reb_vec6d* const grown = realloc(st->images, n*sizeof(*grown));
+        if (!grown){
+            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_MEMORY, .n = n};
+            return 0;
+        }
+        st->images = grown;
+        st->images_allocated = n;
+    }
+    pfvi_ghost_boxes(r, st->images);
+    *f = (struct pfvi_field){
+        .G = (r->gravity == REB_GRAVITY_NONE) ? 0. : r->G,
+        .softening2 = r->softening*r->softening,
+        .N_active = r->N_active,
+        .n_images = n,
+        .images = st->images,
+    };
+    return 1;
 }
 
 void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){

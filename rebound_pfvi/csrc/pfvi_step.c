@@ -74,3 +74,19 @@ void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* st, size_t N,
     stats->omega_min = st->trial.omega_min;
     stats->omega_max = st->trial.omega_max;
 }
+
+double pfvi_trial_resolution(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
+    const struct pfvi_scheme* const scheme = pfvi_scheme_of(st);
+    // The barycentric weights of the nodes: the rule's, or (0, 1)'s for s = 2.
+    static const double two_point[2] = {-1., 1.};
+    const int s = st->options.stages;
+    const double* const weights = (s == 2) ? two_point : st->rule.lagrange;
+    double worst = 0.;
+    for (size_t i=0; i<N; i++){
+        double a[PFVI_STAGES_MAX][3];
+        scheme->stage_accelerations(r, st, i, a);
+        const double resolution = pfvi_stage_resolution((const double (*)[3])a, weights, s);
+        worst = (resolution > worst) ? resolution : worst;
+    }
+    return worst;
+}

@@ -224,6 +224,16 @@ static void two_point_commit(struct reb_simulation* r, struct pfvi_state* st, si
     st->predictor_stages = 0;
 }
 
+// The start acceleration (the last step's end one) and the end one.
+static void two_point_stage_accelerations(const struct reb_simulation* r, const struct pfvi_state* st, size_t i,
+        double (*a)[3]){
+    const struct reb_particle* const p = &r->particles[i];
+    for (int c=0; c<3; c++){
+        a[0][c] = st->end[i].a[c];
+    }
+    a[1][0] = p->ax; a[1][1] = p->ay; a[1][2] = p->az;
+}
+
 const struct pfvi_scheme pfvi_two_point_scheme = {
     .prepare = two_point_prepare,
     .fit = two_point_fit,
@@ -231,4 +241,5 @@ const struct pfvi_scheme pfvi_two_point_scheme = {
     .fitted_omega = two_point_fitted_omega,
     .advance = two_point_advance,
     .commit = two_point_commit,
+    .stage_accelerations = two_point_stage_accelerations,
 };

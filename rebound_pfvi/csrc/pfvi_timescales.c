@@ -1,0 +1,369 @@
+/**
+ * pfvi_timescales.c: the time scales that limit a step, as one step density
+ * sigma(y), a function of the state alone (positions, velocities, masses,
+ * accelerations), so that the symmetric control of pfvi_control.c can track
+ * it time-symmetrically; and the resolution of a step's own stages, the a
+ * posteriori check of that density (docs/adaptive.md).
+ *
+ * The density is the smooth maximum sigma = (sum_k t_k^K)^(1/K) of two kinds
+ * of terms:
+ *  - Kepler terms, one per body: the frequency (mu/r^3)^(1/2) of the body's
+ *    osculating orbit about the subsystem it orbits, times (1 - e^2)^(-gamma_s)
+ *    (e that orbit's eccentricity; the factor evens out the error per orbit
+ *    over eccentricities, measured). The subsystem is the body's partner
+ *    (the attracting body of largest (m_i + m_j)/r^3, its tightest pair) and
+ *    whatever that partner is bound to more tightly than the body is to it:
+ *    a circumbinary planet orbits the binary, a moon its planet, a Jupiter
+ *    family comet the Sun (and Jupiter, beyond Jupiter's distance).
+ *  - Encounter terms, one per pair of bodies (and ghost image) that is not
+ *    bound: a flyby's time scale is the crossing time r/v, which no orbital
+ *    frequency shows. The term nu_ff (q - 2^(1/2)) (1 + c cos^2 theta),
+ *    q = nu_cr/nu_ff with nu_ff = (mu/r^3)^(1/2) and nu_cr = v/r, theta the
+ *    angle between r and v, is zero for every bound pair (q <= 2^(1/2)) and
+ *    nu_cr (1 + c cos^2 theta) for a fast one: v/b at closest approach b,
+ *    (1 + c) v/r approaching and receding. So it changes by at most
+ *    1/(1 + c) of itself per unit time, and the track can follow it (a
+ *    term that changes faster than itself is not trackable: nu_cr alone
+ *    left steps twice too long on leaving Jupiter, and one weighted down by
+ *    the deflection, nu_cr (mu/(v^2 r))^(1/(2s - 2)), left a passage at
+ *    2.5 AU under-resolved; both measured).
+ * Both use the softened distance, and where REBOUND sums over ghost boxes
+ * every image of a pair is a pair (a partner may be an image). The logarithmic rate d log(sigma)/dt is
+ * exact along the motion: each term's from r, v and the relative
+ * acceleration.
+ */
+#include <math.h>
+#include "pfvi.h"
+
+// Whether body i attracts others in REBOUND's sum: an active body with mass.
+static inline int attracts(const struct reb_particle* p, size_t i, size_t n_attracting){
+    return i < n_attracting && p[i].m > 0.;
+}
+
+void pfvi_partner_search(const struct reb_particle* p, size_t N, const struct pfvi_field* f,
+        struct pfvi_partner* out){
+    const size_t n_attracting = (f->N_active < N) ? f->N_active : N;
+    for (size_t i=0; i<N; i++){
+        out[i] = (struct pfvi_partner){SIZE_MAX, 0, 0.};
+    }
+    if (!(f->G > 0.)){
+        return;
+    }
+    const size_t n_images = f->n_images;
+    // A pair's stiffness (m_i + m_j)/r^3 is the same for both bodies, so each
+    // pair (and image) is measured once, when the outer loop reaches the
+    // later body of the two. Each body still meets its candidates in
+    // increasing index (and image), and the first of equal stiffnesses wins.
+    for (size_t i=0; i<N; i++){
+        const int i_attracts = attracts(p, i, n_attracting);
+        const size_t before = (i < n_attracting) ? i : n_attracting;
+        for (size_t j=0; j<before; j++){
+            const int j_attracts = (p[j].m > 0.);
+            if (!(i_attracts || j_attracts)){
+                continue;
+            }
+            const double m = p[i].m + p[j].m;
+            for (size_t g=0; g<n_images; g++){
+                // j's image g relative to i; i's image relative to j is the mirrored one.
+                const struct reb_vec6d* const s = &f->images[g];
+                const double dx = (p[j].x + s->x) - p[i].x, dy = (p[j].y + s->y) - p[i].y,
+                    dz = (p[j].z + s->z) - p[i].z;
+                const double r2 = (dx*dx + dy*dy + dz*dz) + f->softening2;
+                // m / r^3 compared as (m / r^3)^2 = m^2 / r^6 would
+                // overflow sooner; m / (r2 sqrt(r2)) is monotonic in it.
+                const double stiffness = m/(r2*sqrt(r2));
+                if (j_attracts && stiffness > out[i].stiffness){
+                    out[i] = (struct pfvi_partner){j, g, stiffness};
+                }
+                if (i_attracts && stiffness > out[j].stiffness){
+                    out[j] = (struct pfvi_partner){i, n_images - 1 - g, stiffness};
+                }
+            }
+        }
+    }
+}
+
+// A ghost box's shift as (x, y, z, vx, vy, vz).
+static inline void shift_of(const struct reb_vec6d* g, double out[6]){
+    out[0] = g->x; out[1] = g->y; out[2] = g->z;
+    out[3] = g->vx; out[4] = g->vy; out[5] = g->vz;
+}
+
+// The acceleration of particle i: that of the state `start` holds, or p's own.
+static inline const double* acceleration_of(const struct reb_particle* p, const struct pfvi_end_state* start, size_t i){
+    return start ? start[i].a : &p[i].ax;
+}
+
+// The orbit of body i about its subsystem (pfvi_timescales.c's header): the
+// relative position, velocity and acceleration to the subsystem's
+// barycentre and mu = G (m_i + M). Returns 0 without a partner.
+struct kepler_orbit {
+    double r[3], v[3], a[3];
+    double mu;
+};
+
+static int subsystem_orbit(const struct reb_particle* p, const struct pfvi_end_state* start, size_t i,
+        const struct pfvi_field* f, const struct pfvi_partner* partners, struct kepler_orbit* o){
+    const struct pfvi_partner* const first = &partners[i];
+    if (first->j == SIZE_MAX){
+        return 0;
+    }
+    // Members and the shifts of their images: the partner, then while the
+    // last member's own partner is bound to it more tightly than i is to
+    // the first, that partner (not i, not already in).
+    size_t member[PFVI_SUBSYSTEM_MAX];
+    double shift[PFVI_SUBSYSTEM_MAX][6];
+    int n = 1;
+    member[0] = first->j;
+    shift_of(&f->images[first->image], shift[0]);
+    while (n < PFVI_SUBSYSTEM_MAX){
+        const struct pfvi_partner* const next = &partners[member[n-1]];
+        const size_t k = next->j;
+        if (k == SIZE_MAX || k == i || !(next->stiffness > first->stiffness)){
+            break;
+        }
+        int known = 0;
+        for (int m=0; m<n; m++){
+            known |= (member[m] == k);
+        }
+        if (known){
+            break;
+        }
+        double s[6];
+        shift_of(&f->images[next->image], s);
+        for (int c=0; c<6; c++){
+            shift[n][c] = shift[n-1][c] + s[c];
+        }
+        member[n++] = k;
+    }
+    // The barycentre as an offset from the first member, so that a single
+    // partner is its own position to the bit.
+    const struct reb_particle* const q = &p[member[0]];
+    const double q0[6] = {q->x + shift[0][0], q->y + shift[0][1], q->z + shift[0][2],
+        q->vx + shift[0][3], q->vy + shift[0][4], q->vz + shift[0][5]};
+    double M = q->m, offset[6] = {0., 0., 0., 0., 0., 0.}, A[3];
+    const double* const a0 = acceleration_of(p, start, member[0]);
+    for (int c=0; c<3; c++){
+        A[c] = q->m*a0[c];
+    }
+    for (int m=1; m<n; m++){
+        const struct reb_particle* const b = &p[member[m]];
+        const double xv[6] = {b->x + shift[m][0], b->y + shift[m][1], b->z + shift[m][2],
+            b->vx + shift[m][3], b->vy + shift[m][4], b->vz + shift[m][5]};
+        const double* const ab = acceleration_of(p, start, member[m]);
+        for (int c=0; c<6; c++){
+            offset[c] += b->m*(xv[c] - q0[c]);
+        }
+        for (int c=0; c<3; c++){
+            A[c] += b->m*ab[c];
+        }
+        M += b->m;
+    }
+    const double* const ai = acceleration_of(p, start, i);
+    const double xi[6] = {p[i].x, p[i].y, p[i].z, p[i].vx, p[i].vy, p[i].vz};
+    for (int c=0; c<3; c++){
+        o->r[c] = xi[c] - (q0[c] + offset[c]/M);
+        o->v[c] = xi[c+3] - (q0[c+3] + offset[c+3]/M);
+        o->a[c] = ai[c] - A[c]/M;
+    }
+    o->mu = f->G*(p[i].m + M);
+    return 1;
+}
+
+// A Kepler term (0 if it could not reach `negligible`): (mu/r_s^3)^(1/2)
+// (1 - e^2)^(-gamma), with |1 - e^2| held within [1 - PFVI_DENSITY_E2_MAX, 1] (bound orbits beyond e = 0.999 and
+// unbound ones below e^2 = 2 - PFVI_DENSITY_E2_MAX get the same factor; an
+// orbit that is unbound by more gets none, continuously at e^2 = 2), and the
+// time derivative of its logarithm, -3/2 (r.v)/r_s^2 + gamma d(e^2)/dt /
+// (1 - e^2) with d(e^2)/dt from the acceleration beyond the subsystem's own
+// pull (zero for an isolated pair). Returns 0 where the frequency is not a
+// finite positive number.
+static int kepler_term(const struct kepler_orbit* o, double softening2, double gamma, double factor_max,
+        double negligible, double* term, double* dlog){
+    const double* const r = o->r;
+    const double* const v = o->v;
+    const double mu = o->mu;
+    const double r2 = r[0]*r[0] + r[1]*r[1] + r[2]*r[2];
+    const double rs2 = r2 + softening2;
+    const double omega = sqrt(mu/(rs2*sqrt(rs2)));
+    if (!(omega > 0.) || !isfinite(omega)){
+        return 0;
+    }
+    // At most omega times the largest factor: negligible if that is.
+    if (omega*factor_max < negligible){
+        return 0;
+    }
+    const double rn = sqrt(r2);
+    const double rv = r[0]*v[0] + r[1]*v[1] + r[2]*v[2];
+    const double v2 = v[0]*v[0] + v[1]*v[1] + v[2]*v[2];
+    double factor = 1., dlog_factor = 0.;
+    if (gamma > 0. && rn > 0.){
+        double pert[3];
+        for (int k=0; k<3; k++){
+            pert[k] = o->a[k] + mu*r[k]/(r2*rn);   // beyond the subsystem's pull
+        }
+        const double vp = v[0]*pert[0] + v[1]*pert[1] + v[2]*pert[2];
+        const double rp = r[0]*pert[0] + r[1]*pert[1] + r[2]*pert[2];
+        double e2 = 0., de2 = 0.;
+        for (int k=0; k<3; k++){
+            const double ev = ((v2 - mu/rn)*r[k] - rv*v[k])/mu;
+            const double de = (2.*vp*r[k] - rp*v[k] - rv*pert[k])/mu;
+            e2 += ev*ev;
+            de2 += 2.*ev*de;
+        }
+        const double x = 1. - e2, held = fabs(x);
+        const double floor = 1. - PFVI_DENSITY_E2_MAX;
+        if (held <= floor){
+            factor = pow(floor, -gamma);
+        }else if (held < 1.){
+            factor = pow(held, -gamma);
+            dlog_factor = gamma*de2/x;
+        }
+    }
+    *term = omega*factor;
+    *dlog = -1.5*rv/rs2 + dlog_factor;
+    return isfinite(*term) && isfinite(*dlog);
+}
+
+// The running smooth maximum (sum_k t_k^K)^(1/K), kept as the largest term
+// and the sum of (t_k/largest)^K, so that nothing overflows, with the
+// weighted mean of the terms' logarithmic rates.
+struct density_sum {
+    double largest;
+    double sum;
+    double weighted;
+};
+
+typedef char pfvi_density_norm_is_8[(PFVI_DENSITY_NORM == 8) ? 1 : -1];
+
+// x^K by squaring.
+static inline double power_K(double x){
+    const double x2 = x*x, x4 = x2*x2;
+    return x4*x4;
+}
+
+static void density_add(struct density_sum* d, double term, double dlog){
+    if (term > d->largest){
+        const double w = power_K(d->largest/term);
+        d->sum = d->sum*w + 1.;
+        d->weighted = d->weighted*w + dlog;
+        d->largest = term;
+    }else{
+        const double w = power_K(term/d->largest);
+        d->sum += w;
+        d->weighted += w*dlog;
+    }
+}
+
+// An encounter term of one pair (or image): relative position d, velocity
+// w, acceleration b, mu = G (m_i + m_j); nothing if the pair is bound or the
+// term could not reach `negligible` (it is at most the crossing rate).
+static void encounter_term(const double d[3], const double w[3], const double b[3], double mu,
+        const struct pfvi_field* f, double negligible, struct density_sum* sum){
+    const double rs2 = (d[0]*d[0] + d[1]*d[1] + d[2]*d[2]) + f->softening2;
+    const double v2 = w[0]*w[0] + w[1]*w[1] + w[2]*w[2];
+    // Bound (q^2 = v^2 rs/mu <= 2, written without a root), or not a number: no term.
+    if (!(v2*v2*rs2 > 4.*mu*mu)){
+        return;
+    }
+    const double P = d[0]*w[0] + d[1]*w[1] + d[2]*w[2];
+    // cos^2 of the angle between d and w: 1 approaching or receding on a
+    // straight line, 0 at closest approach.
+    const double C = P*P/(v2*rs2);
+    const double boost = 1. + PFVI_ENCOUNTER_APPROACH*C;
+    // The term is below nu_cr (1 + c C): negligible if that is.
+    if (!(v2*boost*boost > negligible*negligible*rs2)){
+        return;
+    }
+    const double rs = sqrt(rs2);
+    const double q = sqrt(v2*rs/mu);     // nu_cr/nu_ff
+    const double nu_ff = sqrt(mu/(rs2*rs));
+    const double term = nu_ff*(q - M_SQRT2)*boost;
+    if (!(term > negligible) || !isfinite(term)){
+        return;
+    }
+    const double wb = w[0]*b[0] + w[1]*b[1] + w[2]*b[2];
+    const double db = d[0]*b[0] + d[1]*b[1] + d[2]*b[2];
+    // d log q/dt = (w.b)/v^2 + (d.w)/(2 rs^2); d log nu_ff/dt = -3/2 (d.w)/rs^2;
+    // d(d.w)/dt = v^2 + d.b.
+    const double dlog_q = wb/v2 + 0.5*P/rs2;
+    const double dC = 2.*P*(v2 + db)/(v2*rs2) - 2.*C*(wb/v2 + P/rs2);
+    const double dlog = -1.5*P/rs2 + (q/(q - M_SQRT2))*dlog_q + PFVI_ENCOUNTER_APPROACH*dC/boost;
+    if (isfinite(dlog)){
+        density_add(sum, term, dlog);
+    }
+}
+
+// gamma_s of the Kepler terms' eccentricity factor: at a fixed kappa the
+// error per orbit grows like (1 - e)^(-beta_s) (measured); the factor
+// (1 - e^2)^(-beta_s/(2s - 2)) evens it out.
+static double eccentricity_exponent(int s){
+    static const double beta[PFVI_STAGES_MAX + 1] = PFVI_SYMMETRIC_BETA;
+    return beta[s]/(2.*s - 2.);
+}
+
+int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state* start, size_t N,
+        const struct pfvi_field* f, int s, struct pfvi_partner* partners, double* sigma, double* dlog_sigma){
+    const double gamma = eccentricity_exponent(s);
+    *sigma = 0.;
+    *dlog_sigma = 0.;
+    pfvi_partner_search(p, N, f, partners);
+    if (!(f->G > 0.)){
+        return 0;
+    }
+    struct density_sum sum = {0., 0., 0.};
+    const double factor_max = pow(1. - PFVI_DENSITY_E2_MAX, -gamma);
+    for (size_t i=0; i<N; i++){
+        struct kepler_orbit o;
+        double term, dlog;
+        if (subsystem_orbit(p, start, i, f, partners, &o)
+                && kepler_term(&o, f->softening2, gamma, factor_max, PFVI_DENSITY_NEGLIGIBLE*sum.largest, &term, &dlog)){
+            density_add(&sum, term, dlog);
+        }
+    }
+    if (sum.largest > 0.){
+        const size_t n_attracting = (f->N_active < N) ? f->N_active : N;
+        for (size_t i=0; i<N; i++){
+            const int i_attracts = attracts(p, i, n_attracting);
+            const size_t before = (i < n_attracting) ? i : n_attracting;
+            const double* const ai = acceleration_of(p, start, i);
+            for (size_t j=0; j<before; j++){
+                if (!(i_attracts || p[j].m > 0.)){
+                    continue;
+                }
+                const double* const aj = acceleration_of(p, start, j);
+                const double mu = f->G*(p[i].m + p[j].m);
+                const double b[3] = {aj[0] - ai[0], aj[1] - ai[1], aj[2] - ai[2]};
+                for (size_t g=0; g<f->n_images; g++){
+                    const struct reb_vec6d* const sh = &f->images[g];
+                    const double d[3] = {(p[j].x + sh->x) - p[i].x, (p[j].y + sh->y) - p[i].y,
+                        (p[j].z + sh->z) - p[i].z};
+                    const double w[3] = {(p[j].vx + sh->vx) - p[i].vx, (p[j].vy + sh->vy) - p[i].vy,
+                        (p[j].vz + sh->vz) - p[i].vz};
+                    encounter_term(d, w, b, mu, f, PFVI_DENSITY_NEGLIGIBLE*sum.largest, &sum);
+                }
+            }
+        }
+    }
+    if (!(sum.largest > 0.)){
+        return 0;
+    }
+    *sigma = sum.largest*pow(sum.sum, 1./PFVI_DENSITY_NORM);
+    *dlog_sigma = sum.weighted/sum.sum;
+    return isfinite(*sigma) && isfinite(*dlog_sigma);
+}
+
+double pfvi_stage_resolution(const double (*a)[3], const double* weights, int s){
+    double D[3] = {0., 0., 0.}, A2 = 0.;
+    for (int k=0; k<s; k++){
+        for (int c=0; c<3; c++){
+            D[c] += weights[k]*a[k][c];
+        }
+        const double a2 = a[k][0]*a[k][0] + a[k][1]*a[k][1] + a[k][2]*a[k][2];
+        A2 = (a2 > A2) ? a2 : A2;
+    }
+    if (!(A2 > 0.)){
+        return 0.;
+    }
+    return sqrt((D[0]*D[0] + D[1]*D[1] + D[2]*D[2])/A2);
+}
