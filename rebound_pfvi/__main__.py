@@ -12,14 +12,20 @@ import sys
 import threading
 from typing import TYPE_CHECKING, Any, Dict, List, Optional, Sequence, TextIO
 
+from . import scenes as scenes_module
+
 if TYPE_CHECKING:
     from .runs import Run
 
 # Scene parameters: option -> (scene keyword, kind of quantity, scenes that take it, help).
 SCENE_OPTIONS = {
-    "--e": ("e", "number", ("kepler", "comet", "triple"), "eccentricity (triple: of the inner binary)"),
-    "--periods": ("periods", "number", ("kepler", "comet", "triple", "oscillator", "mercury-gr"),
-                  "length of the run in periods (comet: of the comet; triple: of the outer orbit)"),
+    "--e": ("e", "number", ("kepler", "comet", "triple", "sungrazer"),
+            "eccentricity (triple: of the inner binary; sungrazer: of the comet)"),
+    "--periods": ("periods", "number", ("kepler", "comet", "triple", "oscillator", "mercury-gr", "jupiter-comet",
+                                        "retrograde", "sungrazer", "circumbinary", "outer-solar-system", "periodic-box"),
+                  "length of the run in periods (comet, jupiter-comet, sungrazer: of the comet; triple: of the "
+                  "outer orbit; retrograde: of the crosser; circumbinary: of the planet; outer-solar-system: of "
+                  "the Pluto-like body; periodic-box: of 1.5 yr)"),
     "--a": ("a", "length", ("kepler", "comet"), 'semi-major axis, e.g. "1 AU" or "1.5e8 km"'),
     "--mass": ("mass", "mass", ("kepler",), 'central mass, e.g. "1 Msun"'),
     "--m": ("m", "mass", ("kepler",), 'orbiter mass, e.g. "1 Mjup" or "0 kg"'),
@@ -139,9 +145,11 @@ def build_parser() -> argparse.ArgumentParser:
         description="Sweeps every integrator's accuracy knob on a scene and writes <scene>.md (who is fastest "
                     "at each accuracy and why, a verdict on every run, the tables), .json, .csv and .png "
                     "(work-precision diagram) to --output.")
-    compare.add_argument("--scene", default="comet", choices=("kepler", "comet", "triple", "oscillator", "mercury-gr"),
+    compare.add_argument("--scene", default="comet", choices=tuple(scenes_module.SCENES),
                          help="default comet (Sun, Jupiter and an e = 0.95 comet, 3 comet periods: no "
-                              "integrator is exact on it); kepler: two bodies, e = 0.95, 100 periods")
+                              "integrator is exact on it); kepler: two bodies, e = 0.95, 100 periods; "
+                              "jupiter-comet, retrograde, sungrazer, circumbinary, outer-solar-system, "
+                              "periodic-box: the step control's hard cases (docs/step-control.md)")
     for option, (_, kind, scenes, text) in SCENE_OPTIONS.items():
         compare.add_argument(option, type=_number(kind) if kind == "number" else _quantity(kind), default=None,
                              help=f"{text} [{', '.join(scenes)}]")

@@ -65,6 +65,23 @@ def orbit_elements(sim: rebound.Simulation, i: int = 1) -> Dict[str, float]:
     return dict(a=o.a, e=o.e, inc=o.inc, Omega=o.Omega, omega=o.omega, M=o.M, n=o.n)
 
 
+def orbit_scales(sim: rebound.Simulation, duration: float) -> List[Tuple[float, float]]:
+    """Each body's orbit size a and its number of orbits over `duration`,
+    from REBOUND's Jacobi elements of `sim` (particle 0 takes particle 1's):
+    the scale of the step control's goal, a position error per body within
+    about epsilon a orbits (docs/step-control.md). An unbound orbit gives
+    its |a| and the orbits of a bound one of that size."""
+    G = sim.G
+    scales: List[Tuple[float, float]] = []
+    total = sim.particles[0].m
+    for i in range(1, sim.N):
+        o = sim.particles[i].orbit(primary=sim.com(last=i))
+        total += sim.particles[i].m
+        a = abs(o.a)
+        scales.append((a, duration / (2.0 * math.pi * math.sqrt(a**3 / (G * total)))))
+    return [scales[0]] + scales if scales else []
+
+
 def kepler_relative(G: float, mass: float, m: float, elements: Dict[str, float], t: float) -> rebound.Particle:
     """The orbiter relative to its primary at time t (a ``rebound.Particle``):
     REBOUND's elements-to-Cartesian conversion of `elements` (at t = 0) with
@@ -481,7 +498,225 @@ def _plain(value: Any, name: str) -> float:
     return _number(value, name)
 
 
-SCENES: Dict[str, type] = {cls.name: cls for cls in (Kepler, Comet, Triple, Oscillator)}
+#: Jupiter's mass (nominal GM ratio) and J2000 mean elements (rounded), for the scenes beside Jupiter.
+JUPITER = dict(m=9.545942339693249e-4, a=5.2026, e=0.0484)
+
+
+def _jupiter(sim: rebound.Simulation, mean_anomaly_deg: float = 0.0) -> None:
+    sim.add(m=JUPITER["m"], a=JUPITER["a"], e=JUPITER["e"], M=math.radians(mean_anomaly_deg))
+
+
+@dataclass
+class JupiterComet(Scene):
+    """A Jupiter-family comet: the Sun, Jupiter and a massless comet (a = 3 AU,
+    e = 0.9) that passes 0.34 AU from Jupiter 11.4 yr into the run.
+
+    The flyby's time scale is the crossing time r/v, which no orbital
+    frequency shows (issue 24); the reference is IAS15 at a tight tolerance.
+    """
+
+    periods: float = 6.0  # of the comet (5.2 yr)
+
+    name = "jupiter-comet"
+    A = 3.0
+
+    def __init__(self, periods: Any = 6.0) -> None:
+        self.periods = _positive(_number(periods, "periods"), "periods")
+
+    def build(self, counter: Counter = None) -> rebound.Simulation:
+        sim = new_simulation()
+        sim.add(m=1.0)
+        _jupiter(sim, 201.0)
+        sim.add(m=0.0, a=self.A, e=0.9, inc=math.radians(5.0), M=math.pi)  # Jacobi: about the Sun and Jupiter
+        sim.move_to_com()
+        return sim
+
+    @property
+    def period(self) -> float:
+        return 2.0 * math.pi * math.sqrt(self.A**3 / rebound_G())
+
+    def describe(self) -> str:
+        return (f"Jupiter-family comet: Sun, Jupiter and a massless comet (a = {self.A:g} AU, e = 0.9) passing "
+                f"0.34 AU from Jupiter at t = 11.4 yr; {self.periods:g} comet periods")
+
+
+@dataclass
+class Retrograde(Scene):
+    """A massless body on a retrograde orbit (a = 3.3 AU, e = 0.6, inclination
+    2.5 rad) that crosses Jupiter's orbit: conjunctions at up to 10 AU/yr
+    relative speed, the closest 0.8 AU apart, over 45 of its periods."""
+
+    periods: float = 45.0
+
+    name = "retrograde"
+    A = 3.3
+
+    def __init__(self, periods: Any = 45.0) -> None:
+        self.periods = _positive(_number(periods, "periods"), "periods")
+
+    def build(self, counter: Counter = None) -> rebound.Simulation:
+        sim = new_simulation()
+        sim.add(m=1.0)
+        _jupiter(sim)
+        sim.add(m=0.0, a=self.A, e=0.6, inc=2.5, Omega=0.5, omega=0.5, M=1.0)  # Jacobi: about the Sun and Jupiter
+        sim.move_to_com()
+        return sim
+
+    @property
+    def period(self) -> float:
+        return 2.0 * math.pi * math.sqrt(self.A**3 / rebound_G())
+
+    def describe(self) -> str:
+        return (f"Retrograde crosser: a massless body (a = {self.A:g} AU, e = 0.6, inclination 2.5 rad) crossing "
+                f"Jupiter's orbit, closest approach 0.8 AU; {self.periods:g} of its periods")
+
+
+@dataclass
+class Sungrazer(Scene):
+    """A sungrazing comet (a = 20 AU, e = 0.999: q = 0.02 AU) beside Jupiter,
+    from aphelion, two of its periods (179 yr)."""
+
+    e: float = 0.999
+    periods: float = 2.0
+
+    name = "sungrazer"
+    A = 20.0
+
+    def __init__(self, e: Any = 0.999, periods: Any = 2.0) -> None:
+        self.e = _number(e, "e")
+        if not 0.0 <= self.e < 1.0:
+            raise ValueError(f"e={e!r} is not a bound eccentricity; allowed: 0 <= e < 1")
+        self.periods = _positive(_number(periods, "periods"), "periods")
+
+    def build(self, counter: Counter = None) -> rebound.Simulation:
+        sim = new_simulation()
+        sim.add(m=1.0)
+        _jupiter(sim)
+        sim.add(m=0.0, a=self.A, e=self.e, inc=0.3, M=math.pi, primary=sim.particles[0])
+        sim.move_to_com()
+        return sim
+
+    @property
+    def period(self) -> float:
+        return 2.0 * math.pi * math.sqrt(self.A**3 / rebound_G())
+
+    def describe(self) -> str:
+        return (f"Sungrazer: a massless comet (a = {self.A:g} AU, e = {self.e:g}, perihelion "
+                f"{self.A * (1 - self.e):.3g} AU) beside Jupiter, from aphelion; {self.periods:g} periods")
+
+
+@dataclass
+class Circumbinary(Scene):
+    """A Kepler-16-like circumbinary planet: stars of 0.69 and 0.20 Msun on a
+    41-day orbit (e = 0.16), a Saturn-mass planet at 0.70 AU (229 days).
+    The planet orbits the binary, not either star."""
+
+    periods: float = 20.0  # of the planet
+
+    name = "circumbinary"
+
+    def __init__(self, periods: Any = 20.0) -> None:
+        self.periods = _positive(_number(periods, "periods"), "periods")
+
+    def build(self, counter: Counter = None) -> rebound.Simulation:
+        sim = new_simulation()
+        sim.add(m=0.6897)
+        sim.add(m=0.20255, a=0.22431, e=0.15944, omega=math.radians(263.464))
+        sim.add(m=0.333 * JUPITER["m"], a=0.7048, e=0.0069, omega=math.radians(318.0), inc=math.radians(0.3))
+        sim.move_to_com()
+        return sim
+
+    @property
+    def period(self) -> float:
+        """The binary's period: what fixed steps must resolve."""
+        return 2.0 * math.pi * math.sqrt(0.22431**3 / (rebound_G() * (0.6897 + 0.20255)))
+
+    @property
+    def t_end(self) -> float:
+        planet = 2.0 * math.pi * math.sqrt(0.7048**3 / (rebound_G() * (0.6897 + 0.20255)))
+        return self.periods * planet
+
+    def describe(self) -> str:
+        return (f"Circumbinary planet (Kepler-16-like): 0.69 + 0.20 Msun binary, 41 d, e = 0.16; a 0.33 Mjup planet "
+                f"at 0.70 AU; {self.periods:g} planet periods")
+
+
+@dataclass
+class OuterSolarSystem(Scene):
+    """The Sun, Jupiter, Saturn, Uranus, Neptune and a Pluto-like body (a =
+    39.5 AU, e = 0.25, inclination 17 deg), REBOUND's classic test."""
+
+    periods: float = 4.0  # of the Pluto-like body (248 yr)
+
+    name = "outer-solar-system"
+    PLANETS = ((JUPITER["m"], 5.2026, 0.0484, 1.30), (2.857e-4, 9.5549, 0.0555, 2.49),
+               (4.366e-5, 19.2184, 0.0463, 0.77), (5.151e-5, 30.11, 0.009, 1.77), (6.6e-9, 39.48, 0.2488, 17.14))
+
+    def __init__(self, periods: Any = 4.0) -> None:
+        self.periods = _positive(_number(periods, "periods"), "periods")
+
+    def build(self, counter: Counter = None) -> rebound.Simulation:
+        sim = new_simulation()
+        sim.add(m=1.00000597682)  # the Sun with the inner planets' mass
+        for m, a, e, inc in self.PLANETS:
+            sim.add(m=m, a=a, e=e, inc=math.radians(inc), M=a, primary=None)
+        sim.move_to_com()
+        return sim
+
+    @property
+    def period(self) -> float:
+        """Jupiter's period: what fixed steps must resolve."""
+        return 2.0 * math.pi * math.sqrt(5.2026**3 / rebound_G())
+
+    @property
+    def t_end(self) -> float:
+        return self.periods * 2.0 * math.pi * math.sqrt(39.48**3 / rebound_G())
+
+    def describe(self) -> str:
+        return f"Outer solar system: the Sun, the four giant planets and a Pluto-like body; {self.periods:g} Pluto periods"
+
+
+@dataclass
+class PeriodicBox(Scene):
+    """Four softened Jupiter-mass bodies in a periodic box of 3 AU with one
+    layer of ghost boxes in x and y (sheet-like): two of them meet 0.3 AU
+    apart only through the x boundary, the other two 0.3 AU apart in the
+    middle. Nobody crosses the box's edge during the run."""
+
+    periods: float = 1.0  # 1.5 yr
+
+    name = "periodic-box"
+    families = ("pfvi", "ias15", "leapfrog", "bs")  # no central body for WHFast
+    SIZE = 3.0
+    DURATION = 1.5
+
+    def __init__(self, periods: Any = 1.0) -> None:
+        self.periods = _positive(_number(periods, "periods"), "periods")
+
+    def build(self, counter: Counter = None) -> rebound.Simulation:
+        sim = new_simulation()
+        sim.root_size = self.SIZE
+        sim.N_root_x = sim.N_root_y = sim.N_root_z = 1
+        sim.boundary = "periodic"
+        sim.N_ghost_x = sim.N_ghost_y = 1
+        sim.softening = 0.01
+        for x, y, vx, vy in ((1.35, -0.9, 0.0, 1.2), (-1.35, 0.9, 0.0, -1.2), (0.0, 0.6, 0.3, 0.0),
+                             (0.0, 0.9, -0.3, 0.0)):
+            sim.add(m=1e-3, x=x, y=y, vx=vx, vy=vy)
+        sim.move_to_com()
+        return sim
+
+    @property
+    def period(self) -> float:
+        return self.DURATION
+
+    def describe(self) -> str:
+        return (f"Periodic box: four softened 1e-3 Msun bodies in a {self.SIZE:g} AU box with ghost boxes in x and y, "
+                f"two meeting 0.3 AU apart through the boundary; {self.periods * self.DURATION:g} yr")
+
+
+SCENES: Dict[str, type] = {cls.name: cls for cls in (Kepler, Comet, Triple, Oscillator, JupiterComet, Retrograde,
+                                                     Sungrazer, Circumbinary, OuterSolarSystem, PeriodicBox)}
 
 
 def make(name: str, **params: Any) -> Scene:

@@ -150,17 +150,19 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // The a posteriori check of a symmetric step: its stages resolve each
 // particle's acceleration to u = ((s - 1)! |D|/A)^(1/(s - 1)) (D the leading
 // coefficient of their polynomial, A the largest |a|), about h times the
-// particle's fastest time scale. Along Kepler orbits of e = 0 ... 0.9999
-// u <= RESOLUTION_s kappa (measured: 1.02, 1.42, 1.82, 2.15, 2.50, 2.90,
-// 3.28 for s = 2 ... 8, each raised by 5%). A step whose stages imply an
+// particle's fastest time scale. Along Kepler orbits of e = 0 ... 0.9999,
+// from any phase, two bodies or a test particle, u <= RESOLUTION_s kappa
+// (measured: 1.02, 1.42, 1.86, 2.27, 2.67, 3.06, 3.46 for s = 2 ... 8,
+// each raised by 5%). A step whose stages imply an
 // error (u/(RESOLUTION_s kappa))^(2s - 2) above RESOLUTION_MAX is retaken
-// shorter (at most RESOLUTION_RETRIES times) and the density scaled up
+// shorter (at most RESOLUTION_RETRIES times, each at most half the last)
+// and the density scaled up
 // (lambda, density_scale) by the factor it took; lambda falls back towards
 // 1 where the stages resolve whole intervals RESOLUTION_SLACK times finer
 // than needed.
-#define PFVI_RESOLUTION_CONSTANTS {0., 0., 1.1, 1.5, 1.9, 2.3, 2.6, 3.0, 3.4}
+#define PFVI_RESOLUTION_CONSTANTS {0., 0., 1.1, 1.5, 1.95, 2.4, 2.8, 3.2, 3.65}
 #define PFVI_RESOLUTION_MAX 3.
-#define PFVI_RESOLUTION_RETRIES 4
+#define PFVI_RESOLUTION_RETRIES 5
 #define PFVI_RESOLUTION_SLACK 2.0
 // REBOUND's sim.dt of a new simulation (reb_simulation_create): not taken
 // as a cap on the first step of the symmetric control.

@@ -369,10 +369,11 @@ static struct track_position symmetric_position(const struct pfvi_state* st, dou
 //  - the stages resolve the forces worse than any Kepler orbit does at this
 //    kappa (the error they imply above PFVI_RESOLUTION_MAX times the worst
 //    there: a time scale the density misses): retaken at the step that
-//    resolves them, and lambda raised by the factor that took. Where a
-//    shorter step does not resolve them better (a force that jumps within a
-//    step: a tree code's cells) the step is kept as it is, lambda is left
-//    alone and the step counted in n_unresolved.
+//    would resolve them, at most half the last, and lambda raised by the
+//    factor that took. Still unresolved after PFVI_RESOLUTION_RETRIES
+//    retakes (a force that jumps within a step, as a tree code's cells do,
+//    is resolved by no step), the last is kept, lambda left as it was and
+//    the step counted in n_unresolved.
 // Lambda falls back towards 1 where whole intervals resolve the forces
 // PFVI_RESOLUTION_SLACK times finer than needed (n_asymmetric). Without
 // pairs (no gravity, or no massive body) the steps are sim.dt.
@@ -418,7 +419,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     double h = fmin(t.remaining, cap);
     const double lambda0 = st->density_scale;
     double lambda = lambda0;
-    double sigma1 = 0., g1 = 0., u = 0., u_last = 0., h_last = 0.;
+    double sigma1 = 0., g1 = 0., u = 0.;
     int restart = 0, shortened = 0, retakes = 0, unresolved = 0;
     struct pfvi_field field;
     for (;;){
@@ -439,10 +440,8 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
             // The error the stages imply, relative to the worst along
             // Kepler orbits (about epsilon per orbit there).
             const int coarse = pow(u/u_target, 2.*o->stages - 2.) > PFVI_RESOLUTION_MAX;
-            // A shorter step that did not resolve them better (u falls about
-            // in proportion to h where they can be resolved): they cannot be.
-            const int no_better = retakes > 0 && u > 0.5*(u_last + u_last*h/h_last);
-            unresolved = coarse && (retakes == PFVI_RESOLUTION_RETRIES || no_better);
+            // Still coarse after the last retake: no shorter step resolves them.
+            unresolved = coarse && retakes == PFVI_RESOLUTION_RETRIES;
             if (!jump && (!coarse || unresolved)){
                 break;
             }
@@ -453,9 +452,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
                 // The step that resolves the forces as the density should
                 // have: the interval starts afresh here, lambda times denser.
                 retakes++;
-                u_last = u;
-                h_last = h;
-                const double scale = 1./fmin(0.8, u_target/u);
+                const double scale = 1./fmin(0.5, u_target/u);
                 lambda *= scale;
                 t.rho *= scale;
                 t.length = kappa/t.rho;

@@ -170,6 +170,14 @@ static int subsystem_orbit(const struct reb_particle* p, const struct pfvi_end_s
     return 1;
 }
 
+// Whether body i's subsystem is its partner alone (the partner's own partner
+// is i, or bound to it less tightly than i is).
+static int single_partner(const struct pfvi_partner* partners, size_t i){
+    const struct pfvi_partner* const first = &partners[i];
+    const struct pfvi_partner* const next = &partners[first->j];
+    return next->j == SIZE_MAX || next->j == i || !(next->stiffness > first->stiffness);
+}
+
 // A Kepler term (0 if it could not reach `negligible`): (mu/r_s^3)^(1/2)
 // (1 - e^2)^(-gamma), with |1 - e^2| held within [1 - PFVI_DENSITY_E2_MAX, 1] (bound orbits beyond e = 0.999 and
 // unbound ones below e^2 = 2 - PFVI_DENSITY_E2_MAX get the same factor; an
@@ -242,14 +250,15 @@ static inline double power_K(double x){
     return x4*x4;
 }
 
-static void density_add(struct density_sum* d, double term, double dlog){
+// Adds `count` equal terms.
+static void density_add(struct density_sum* d, double term, double dlog, double count){
     if (term > d->largest){
         const double w = power_K(d->largest/term);
-        d->sum = d->sum*w + 1.;
-        d->weighted = d->weighted*w + dlog;
+        d->sum = d->sum*w + count;
+        d->weighted = d->weighted*w + count*dlog;
         d->largest = term;
     }else{
-        const double w = power_K(term/d->largest);
+        const double w = count*power_K(term/d->largest);
         d->sum += w;
         d->weighted += w*dlog;
     }
@@ -290,7 +299,7 @@ static void encounter_term(const double d[3], const double w[3], const double b[
     const double dC = 2.*P*(v2 + db)/(v2*rs2) - 2.*C*(wb/v2 + P/rs2);
     const double dlog = -1.5*P/rs2 + (q/(q - M_SQRT2))*dlog_q + PFVI_ENCOUNTER_APPROACH*dC/boost;
     if (isfinite(dlog)){
-        density_add(sum, term, dlog);
+        density_add(sum, term, dlog, 1.);
     }
 }
 
@@ -314,11 +323,19 @@ int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state*
     struct density_sum sum = {0., 0., 0.};
     const double factor_max = pow(1. - PFVI_DENSITY_E2_MAX, -gamma);
     for (size_t i=0; i<N; i++){
+        // Each orbit counts twice, once per body of a pair as the
+        // calibration of C_s on two bodies had it: a pair of mutual
+        // partners is one orbit, seen from the later of the two.
+        const size_t j = partners[i].j;
+        if (j != SIZE_MAX && j > i && partners[j].j == i && partners[j].image == f->n_images - 1 - partners[i].image
+                && single_partner(partners, i) && single_partner(partners, j)){
+            continue;
+        }
         struct kepler_orbit o;
         double term, dlog;
         if (subsystem_orbit(p, start, i, f, partners, &o)
                 && kepler_term(&o, f->softening2, gamma, factor_max, PFVI_DENSITY_NEGLIGIBLE*sum.largest, &term, &dlog)){
-            density_add(&sum, term, dlog);
+            density_add(&sum, term, dlog, 2.);
         }
     }
     if (sum.largest > 0.){
