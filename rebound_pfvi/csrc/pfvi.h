@@ -536,6 +536,11 @@ struct pfvi_state {
     double track_kappa;
     double density_scale;
     double dt_last_full;
+    // What the symmetric track's time lost to rounding: the state is at
+    // r->t + t_compensation (0 if r->t is not t_compensated, the t it was
+    // kept for), so that a step capped to finish on time lands there.
+    double t_compensation;
+    double t_compensated;
     // The density at the end of the last step (and its partners), the next
     // step's start density if that step starts there (density_N > 0).
     size_t density_N;

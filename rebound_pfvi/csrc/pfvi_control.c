@@ -417,13 +417,17 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         || (st->dt_proposed == 0. && dt == PFVI_REBOUND_DT_DEFAULT);
     const double cap = uncapped ? INFINITY : dt;
     double h = fmin(t.remaining, cap);
+    // The state is at t0 + t_lo: a step capped to reach t0 + sign cap goes
+    // sign cap - t_lo (t's rounding over the track, kept as x's and v's is).
+    const double t_lo = (r->t == st->t_compensated) ? st->t_compensation : 0.;
     const double lambda0 = st->density_scale;
     double lambda = lambda0;
     double sigma1 = 0., g1 = 0., u = 0.;
     int restart = 0, shortened = 0, retakes = 0, unresolved = 0;
     struct pfvi_field field;
     for (;;){
-        const enum pfvi_trial trial = pfvi_trial_step(r, st, N, t0, sign*h);
+        const int capped = (h == cap);
+        const enum pfvi_trial trial = pfvi_trial_step(r, st, N, t0, capped ? sign*h - t_lo : sign*h);
         if (trial == PFVI_TRIAL_ERROR){
             return 0.;
         }
@@ -470,8 +474,21 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
             return 0.;
         }
     }
-    h *= sign;
+    const int capped = (h == cap);
+    h = capped ? sign*h - t_lo : sign*h;
     pfvi_commit_step(r, st, N, h);
+    if (capped){
+        // The time REBOUND asked for, which the state is at (the stage
+        // predictor follows the relabelling).
+        st->predictor_t = (st->predictor_t == r->t) ? t0 + sign*cap : st->predictor_t;
+        r->t = t0 + sign*cap;
+        st->t_compensation = 0.;
+    }else{
+        // TwoSum: what r->t = t0 + h lost.
+        const double t1 = r->t, back = t1 - h;
+        st->t_compensation = t_lo + ((t0 - back) + (h - (t1 - back)));
+    }
+    st->t_compensated = r->t;
     int asymmetric = shortened;
     if (unresolved){
         // Shorter steps did not help: the density was right, keep its scale.
@@ -487,8 +504,9 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         static const double constant[PFVI_STAGES_MAX + 1] = PFVI_SYMMETRIC_CONSTANTS;
         st->statistics.error_estimate = constant[o->stages]*pow(u/resolution_constant[o->stages], 2.*o->stages - 2.);
     }
-    // Where the track now stands.
-    const double step = fabs(h);
+    // Where the track now stands (a capped step counts as its cap: what
+    // it took beyond that was the track's own rounding).
+    const double step = capped ? cap : fabs(h);
     const int full = (step == t.remaining);
     if (restart){
         st->rho = 0.;

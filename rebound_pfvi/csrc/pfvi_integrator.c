@@ -43,9 +43,10 @@ const struct reb_integrator pfvi_integrator = {
     "Murua 2017, J. Comput. Phys.) or once the change is below " PFVI_STR(PFVI_ITERATION_ROUNDOFF) " "
     "(relative); a solve that does not converge is retried shorter or refused. "
     "Steps are adaptive by default (epsilon = " PFVI_STR(PFVI_EPSILON_DEFAULT) ", step_control = "
-    "'symmetric'): h = kappa/rho with rho tracking the pairs' frequencies time-symmetrically "
-    "(Hairer & Soderlind 2005), one stage solve per step, epsilon about the relative position "
-    "error per orbit; K&V's osculating-circle bound ('Frequency Evaluation and Error Control') "
+    "'symmetric'): h = kappa/rho with rho tracking a density of every orbit's and every encounter's "
+    "time scale time-symmetrically (Hairer & Soderlind 2005), one stage solve per step, checked "
+    "afterwards by the resolution of the step's own stages; epsilon is the relative position error "
+    "per orbit; K&V's osculating-circle bound ('Frequency Evaluation and Error Control') "
     "is kept as step_control = 'reversible' or 'seed'; epsilon = 0 gives fixed steps of sim.dt. "
     "Forward or backward. A step that cannot be taken "
     "(invalid option, non-finite particle or force, overflow, u at a pole) raises an error "
@@ -147,29 +148,45 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "determinant falls below " PFVI_STR(PFVI_POLE_GUARD) " of its value at u = 0 are refused.",
         REB_DOUBLE, u_max),
     PFVI_OPTION("Tolerance of the adaptive step control; 0: fixed steps of sim.dt. Default "
-        PFVI_STR(PFVI_EPSILON_DEFAULT) ". With step_control = 'symmetric' (default) it is about "
-        "the relative position error per orbit of a bound pair, for eccentricities 0 to 0.999 (at "
-        "e = 0.5 ... 0.99 the measured error per orbit is 0.1 to 1 epsilon, less on rounder orbits; "
-        "beyond e = 0.999 the eccentricity factor is held and the error per orbit grows): steps are "
-        "kappa/rho with kappa = (epsilon/C_s)^(1/(2s - 2)), at most " PFVI_STR(PFVI_KAPPA_MAX) ", "
-        "and rho following sigma = (sum_i sigma_i^" PFVI_STR(PFVI_DENSITY_NORM) ")^(1/"
-        PFVI_STR(PFVI_DENSITY_NORM) "), sigma_i = sqrt(G (m_i + m_partner)/r^3) (1 - e_i^2)^(-gamma_s) "
-        "over the particles with a partner (rebound_pfvi's docs, adaptive steps). With 'reversible' and 'seed' it bounds "
+        PFVI_STR(PFVI_EPSILON_DEFAULT) ". With step_control = 'symmetric' (default) it is the "
+        "position error per orbit a body may gather, relative to its orbit's size: measured, every "
+        "body's error ends within 0.01 to 2.3 times epsilon a n (a its orbit's size, n its orbits) on "
+        "Kepler orbits of e = 0.5 ... 0.99, a comet passing Jupiter, a body crossing Jupiter's orbit, "
+        "a sungrazer, a circumbinary planet, the outer solar system and a periodic box (rebound_pfvi's "
+        "docs, step control). Steps are kappa/rho with kappa = (epsilon/C_s)^(1/(2s - 2)) and rho "
+        "following a density of the system's time scales (see step_control). Epsilon is held within "
+        "what s stages deliver: above C_s (s = 8: 1.2e-7, s = 6: 4.4e-5, s = 4: 0.019) kappa is at its "
+        "cap of " PFVI_STR(PFVI_KAPPA_MAX) ", the largest step the stage solve converges at, and the "
+        "error stays below the request; below the round-off floor (s = 5 ... 8: 1e-14, s = 4: 1e-13, "
+        "s = 3: 1e-12, s = 2: 1e-10) the error per orbit stops falling and the request is taken as the "
+        "floor (epsilon_effective says what was used). With 'reversible' and 'seed' it bounds "
         "K&V's osculating-circle estimate | |R1 - R2| - |O1 - O2| | of a step's position error, "
         "relative to the smaller radius, for the particle where it is largest: third order in dt "
         "whatever the order of the scheme; a particle without comparable circles at both ends (at "
         "rest, on a radial path, across an inflection) is left out, and with none left the step is "
         "held at most sim.dt. Those two also keep u = omega*|dt| <= u_max.",
         REB_DOUBLE, epsilon),
-    { "Step selection when epsilon > 0. 'symmetric' (default): h = kappa/rho, rho updated by "
-      "rho_n+1/2 = rho_n-1/2 + kappa d log(sigma)/dt (Hairer & Soderlind 2005, SIAM J. Sci. Comput. "
-      "26, 1838), which reads the same forward and backward: one stage solve per step, and a "
-      "round trip retraces the steps. sim.dt is the step proposed after each step; changed (by "
-      "REBOUND to finish on time, or by the user) it caps the next step, which restarts rho from "
-      "sigma. A step whose solve does not converge, or at whose end sigma exceeds "
-      PFVI_STR(PFVI_DENSITY_JUMP_MAX) " times kappa/h (a close approach within one step), is "
-      "retried at half the step (n_rejected; such steps are not time-symmetric: n_asymmetric). "
-      "Without pairs (gravity off, no massive body) the steps are sim.dt. "
+    { "Step selection when epsilon > 0. 'symmetric' (default): h = kappa/rho with rho following a "
+      "density sigma of the system's time scales: per body the frequency of its osculating orbit about "
+      "the subsystem it orbits (its partner, the tightest pair it is in, and what that partner is bound "
+      "to more tightly: a circumbinary planet orbits the binary), and per unbound pair (or ghost image) "
+      "its crossing rate v/r, softened; rho_n+1/2 = rho_n-1/2 + kappa d log(sigma)/dt (Hairer & "
+      "Soderlind 2005, SIAM J. Sci. Comput. 26, 1838) reads the same forward and backward: one stage "
+      "solve per step, and a round trip retraces the steps. sim.dt is the step proposed after each "
+      "step; a different value (REBOUND finishing on time, a sampling time, the user) caps the step "
+      "and the next steps cross the rest of the interval, so the track goes on and a reversal "
+      "retraces the capped step first. REBOUND's sim.dt of a new simulation (0.001) does not cap the "
+      "first step; any other value set before it does. Checks at each step's end, each retaking the "
+      "step shorter (n_rejected; such steps are not time-symmetric: n_asymmetric): a stage solve that "
+      "does not converge (half the step); a density at either end above "
+      PFVI_STR(PFVI_DENSITY_JUMP_MAX) " times kappa/h (a close approach within one step: half the "
+      "step); stage accelerations whose polynomial shows the forces resolved worse than on any Kepler "
+      "orbit (the error they imply above " PFVI_STR(PFVI_RESOLUTION_MAX) " times the worst there: a "
+      "time scale the density does not show, such as a force callback's): retaken at the step that "
+      "resolves them, the density scaled up (density_scale) and let down again where the steps turn "
+      "out finer than needed. A force that jumps within a step (a tree code's cells) is resolved by "
+      "no step: after " PFVI_STR(PFVI_RESOLUTION_RETRIES) " retakes the step is kept and counted in "
+      "n_unresolved. Without pairs (gravity off, no massive body) the steps are sim.dt. "
       "'seed' (K&V): a step is accepted if the osculating-circle estimate "
       "is at most epsilon, otherwise retried shorter (counted in n_rejected, nothing changed); "
       "the next step is h*" PFVI_STR(PFVI_CONTROL_SAFETY) "*(epsilon/estimate)^(1/"
@@ -196,6 +213,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "track_kappa", offsetof(struct pfvi_state, track_kappa), 0, 0, 0 },
     { "", REB_DOUBLE, "density_scale", offsetof(struct pfvi_state, density_scale), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_last_full", offsetof(struct pfvi_state, dt_last_full), 0, 0, 0 },
+    { "", REB_DOUBLE, "t_compensation", offsetof(struct pfvi_state, t_compensation), 0, 0, 0 },
+    { "", REB_DOUBLE, "t_compensated", offsetof(struct pfvi_state, t_compensated), 0, 0, 0 },
     { "", REB_INT, "predictor_stages", offsetof(struct pfvi_state, predictor_stages), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_h", offsetof(struct pfvi_state, predictor_h), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_t", offsetof(struct pfvi_state, predictor_t), 0, 0, 0 },
@@ -220,11 +239,12 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "within what the stages can deliver (0 before a symmetric step).",
         REB_DOUBLE, epsilon_effective),
     PFVI_STATISTIC("steps tried and rejected by the step control (or whose stage "
-        "solve did not converge and was retried shorter).", REB_UINT64, n_rejected),
+        "solve did not converge and was retried shorter; 'symmetric': see step_control).",
+        REB_UINT64, n_rejected),
     PFVI_STATISTIC("trial steps, taken or not (the work done: n_attempts / n_steps per step).",
         REB_UINT64, n_attempts),
-    PFVI_STATISTIC("steps taken that are not time-symmetric: 'symmetric' steps retried shorter "
-        "(a solve that did not converge, or a close approach within the step), and 'reversible' "
+    PFVI_STATISTIC("steps taken that are not time-symmetric: 'symmetric' steps retaken shorter "
+        "(see step_control) or after which density_scale fell back, and 'reversible' "
         "steps whose step equation was not solved in " PFVI_STR(PFVI_REVERSIBLE_MAX_TRIALS) " trial "
         "steps and that were taken at the largest step tried meeting epsilon.",
         REB_UINT64, n_asymmetric),
