@@ -43,7 +43,8 @@ ProgressCallback = Callable[[int, int, "Run"], None]
 _COMPARE_PFVI = {"pfvi_force_evaluations": "n_force_evaluations", "attempts_per_step": "attempts_per_step",
                  "iterations_mean": "iterations_mean", "n_rejected": "n_rejected"}
 #: stability's JSON keys for what pfvi counted (the same in Run.pfvi).
-_STABILITY_PFVI = ("n_steps", "n_attempts", "n_rejected", "n_asymmetric", "n_u_limited", "iterations_max")
+_STABILITY_PFVI = ("n_steps", "n_attempts", "n_rejected", "n_asymmetric", "n_unresolved", "n_u_limited",
+                   "iterations_max")
 
 
 def pfvi_counts(sim: rebound.Simulation) -> Dict[str, float]:
@@ -52,7 +53,8 @@ def pfvi_counts(sim: rebound.Simulation) -> Dict[str, float]:
     steps, attempts = int(ri.n_steps), int(ri.n_attempts)
     return {"n_steps": steps, "n_attempts": attempts, "attempts_per_step": attempts / max(1, steps),
             "n_rejected": int(ri.n_rejected), "n_asymmetric": int(ri.n_asymmetric),
-            "n_u_limited": int(ri.n_u_limited), "iterations_max": int(ri.iterations_max),
+            "n_unresolved": int(ri.n_unresolved), "n_u_limited": int(ri.n_u_limited),
+            "iterations_max": int(ri.iterations_max),
             "iterations_mean": float(ri.iterations_mean), "n_force_evaluations": int(ri.n_force_evaluations)}
 
 
@@ -146,7 +148,8 @@ class Run:
                        relative_position_error=row.get("relative_position_error"),
                        force_evaluations=row.get("force_evaluations"), pfvi=pfvi,
                        warnings=list(row.get("warnings", ())))
-        pfvi = {key: row[key] for key in _STABILITY_PFVI} if "n_steps" in row else None
+        # (n_unresolved: reports written before it existed have none)
+        pfvi = {key: row.get(key, 0) for key in _STABILITY_PFVI} if "n_steps" in row else None
         options = {"fitting": row.get("fitting"), "stages": row.get("stages"), "epsilon": row.get("epsilon")}
         return cls(STABILITY, row["case"], row["family"], row["integrator"], options=options, status=row["status"],
                    verdict=row.get("verdict", ""), verdict_detail=row.get("verdict_detail", ""),

@@ -556,6 +556,8 @@ def what_happened(row: Run) -> str:
             parts.append(f"{row.pfvi['n_rejected']} trial steps rejected")
         if row.pfvi["n_asymmetric"]:
             parts.append(f"{row.pfvi['n_asymmetric']} steps not time-symmetric (n_asymmetric)")
+        if row.pfvi.get("n_unresolved"):
+            parts.append(f"{row.pfvi['n_unresolved']} steps kept with forces no shorter step resolved (n_unresolved)")
     if row.status == "finished" and not row.finite:
         parts.append("NON-FINITE STATE")
     return "; ".join(parts)
