@@ -81,6 +81,39 @@ def _show_options_and_statistics():
 _show_options_and_statistics()
 
 
+def _refuse_integers_that_wrap():
+    """sim.integrator.<field> = value for "pfvi": REBOUND passes an integer
+    field's value through ctypes.c_int, which wraps (stages = 2**32 + 4 ran at
+    s = 4). An int that does not fit the field's C type is refused here,
+    naming the field; everything else is REBOUND's own assignment (and a
+    value that fits is checked by the core when the next step starts)."""
+    from rebound.binarydata_field_descriptor import REB_BINARYDATA_DTYPE
+    from rebound.integrator import IntegratorConfiguration
+
+    generic = IntegratorConfiguration.__setattr__
+    if getattr(generic, "_pfvi", False):
+        return
+    limits = {}
+    for ctype in (_ctypes.c_int, _ctypes.c_uint, _ctypes.c_long, _ctypes.c_ulong):
+        bits = 8 * _ctypes.sizeof(ctype)
+        limits[ctype] = (-2**(bits - 1), 2**(bits - 1) - 1) if ctype(-1).value < 0 else (0, 2**bits - 1)
+
+    def __setattr__(self, name, value):
+        if self.name == INTEGRATOR_NAME.encode() and isinstance(value, int) and not isinstance(value, bool):
+            descriptor = self.callbacks.field_descriptor_list.field_descriptor_for_name(name)
+            low, high = limits.get(REB_BINARYDATA_DTYPE.get(descriptor.dtype), (None, None))
+            if low is not None and not low <= value <= high:
+                raise ValueError(f"integrator.{name} = {value} does not fit the field's C type "
+                                 f"({low} to {high}); not set")
+        generic(self, name, value)
+
+    __setattr__._pfvi = True
+    IntegratorConfiguration.__setattr__ = __setattr__
+
+
+_refuse_integers_that_wrap()
+
+
 def _check_stages(s):
     if s not in STAGES:
         raise ValueError(f"s={s!r} is not valid; allowed: {', '.join(map(str, STAGES))}")

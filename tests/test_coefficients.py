@@ -52,9 +52,12 @@ def pfvi_step(q0, v0, h, omega, force, fitting):
 @pytest.mark.parametrize("u", [0.05, 0.4, 0.9])
 @pytest.mark.parametrize("h", [0.1, -0.07])
 def test_closed_form_matches_seed_equations(fitting, u, h):
-    # An anharmonic force, so that the residual kicks matter.
+    # An anharmonic force, so that the residual kicks matter; its pull (W^2
+    # = 50 near q = 0.8) keeps every (u, h) here within the fixed frequency's
+    # stability bound omega tan(u/2) <= W (docs/method.md), which a weaker one
+    # (W = 1.35 against omega = 9 at u = 0.9) fails: that step is refused.
     def force(q):
-        return -1.7 * q - 0.6 * q ** 3 + 0.2
+        return -50.0 * q - 0.6 * q ** 3 + 0.2
 
     omega = abs(u / h)
     expected = seed_step(0.8, -0.35, h, omega, force, fitting)

@@ -53,9 +53,26 @@ def test_phase_literal_from_exact_momenta_is_not_exact(u, measured):
 
 
 def test_u_beyond_u_max_is_limited_and_counted():
+    # u = 1.5 is limited to u_max = 1 (omega 1/1.5 against the motion's 1);
+    # the step so fitted is still stable (half trace -0.28).
     sim = harmonic_oscillator(1.0, Q0, V0)
-    sim.dt = 2.5
+    sim.dt = 1.5
     sim.steps(100)
     assert sim.integrator.u_max == 1.0
     assert sim.integrator.n_u_limited == 100
-    assert sim.integrator.omega_max == pytest.approx(1.0 / 2.5, rel=1e-15)
+    assert sim.integrator.omega_max == pytest.approx(1.0 / 1.5, rel=1e-15)
+    assert math.hypot(sim.particles[0].x, sim.particles[0].y) < 2 * math.hypot(*Q0)
+
+
+def test_a_limited_fit_that_cannot_follow_the_motion_is_refused():
+    # At dt = 2.5 the limited omega = 0.4 leaves the pull (W h = 2.5, beyond
+    # even Verlet's 2) to the residual: half trace -2.9, a growth of 5.7 per
+    # step, which ran silently to 1e75 in 100 steps; now the first step is
+    # refused.
+    sim = harmonic_oscillator(1.0, Q0, V0)
+    sim.dt = 2.5
+    with pytest.raises(RuntimeError, match=r"particle 0: the 2-stage step fitted to the fixed omega = 0\.4 is "
+                       r"unstable at dt = 2\.5 against the pull it feels \(frequency 1\): a deviation grows by a "
+                       r"factor 1 \+ 4\.6"):
+        sim.steps(100)
+    assert sim.t == 0.0 and (sim.particles[0].x, sim.particles[0].y) == Q0

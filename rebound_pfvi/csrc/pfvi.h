@@ -89,6 +89,11 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // when the s-stage matrix's determinant falls below this fraction of its
 // value at u = 0.
 #define PFVI_POLE_GUARD 1e-3
+// A fixed frequency's step is refused as unstable once half the trace of its
+// linear map exceeds 1 by this: a deviation growing by at most 1 + 1.4e-7
+// per step (an e-fold in 7e6 steps) passes, and round-off in the trace
+// (terms of order 1) cannot refuse a stable step.
+#define PFVI_STABILITY_SLACK 1e-14
 // Largest fitted frequency: the two-point step needs omega^2 (and omega^2 q),
 // which leave the doubles above omega ~ 1.3e154. A larger omega (a body
 // almost at rest turning sharply, or u_max/|dt| for a tiny dt) is fitted as 0,
@@ -423,6 +428,9 @@ PFVI_INTERNAL void pfvi_centres(const struct reb_particle* p, const struct pfvi_
 // for "mean-motion" (0 if unbound or without a partner).
 PFVI_INTERNAL double pfvi_frequency(const struct pfvi_options* o, const struct reb_particle* p,
         const struct reb_particle* partner, const struct pfvi_centre* c, const double a[3]);
+// sqrt(max(0, -a.d)/|d|^2): the frequency of the pull a exerts towards d = 0
+// (d scaled before squaring); 0 if a points away, NaN if a is not a number.
+PFVI_INTERNAL double pfvi_radial_frequency(const double d[3], const double a[3]);
 
 // Statistics (REBOUND fields, saved in archives).
 struct pfvi_statistics {
@@ -495,6 +503,8 @@ enum pfvi_fault_kind {
     PFVI_FAULT_NOT_CONVERGED,   // n: stages, value: change, rounds, t0
     PFVI_FAULT_REJECTED,        // t0, h, value: estimate
     PFVI_FAULT_UNSOLVED,        // t0, rounds: trials, h, value: F
+    PFVI_FAULT_UNSTABLE,        // particle, h, n, value: omega, bound: its pull's frequency, growth: factor per step - 1
+    PFVI_FAULT_CALLBACK_CHANGED,// t: a callback replaced additional_forces, gravity_custom or extras
 };
 struct pfvi_fault {
     enum pfvi_fault_kind kind;
@@ -507,13 +517,19 @@ struct pfvi_fault {
     double t;
     double h;
     double value;
+    double bound;
+    double growth;
     uint64_t rounds;
     int flag;
 };
 
-// Integrator state: options, statistics and the controller's state are
+// Integrator state: settings, statistics and the controller's state are
 // REBOUND fields (saved in archives); the scratch grows only with N.
 struct pfvi_state {
+    // The options as set (REBOUND fields: Python, archives, and callbacks
+    // during a step write them), and the copy the current step runs with,
+    // taken when it starts: a change made during a step acts from the next.
+    struct pfvi_options settings;
     struct pfvi_options options;
     struct pfvi_statistics statistics;
     // Controller state (saved): the last solution of the reversible step
@@ -618,6 +634,22 @@ struct pfvi_state {
     // restore every particle that is still there. Tracked only while a step
     // runs, set up at the first change (the hot path never touches it).
     int in_step;
+    // The force model the step runs with (taken when it starts), and what a
+    // callback set during the step (applied when it ends: a change acts from
+    // the next step, as one made between steps).
+    struct pfvi_force_model step_model;
+    struct pfvi_force_model pending_model;
+    int model_pending;
+    // REBOUND freed this state during its step (a callback switched or
+    // re-assigned the integrator): the step finishes, then the state goes.
+    int free_pending;
+    // A steps() or integrate() a callback called during the step was
+    // refused; REBOUND's loop around it still set status (and may have
+    // flipped dt's sign): both go back to the step's own after each force
+    // evaluation, so that the run goes on as without the call.
+    int reentry_refused;
+    int status_at_start;
+    double dt_at_start;
     size_t step_N;
     size_t* origin;
     size_t origin_N;
@@ -650,6 +682,15 @@ PFVI_INTERNAL int pfvi_field_of(struct reb_simulation* r, struct pfvi_state* st,
 // into images (room for that many), in the order of pfvi_field.
 PFVI_INTERNAL size_t pfvi_ghost_box_count(const struct reb_simulation* r);
 PFVI_INTERNAL void pfvi_ghost_boxes(struct reb_simulation* r, struct reb_vec6d* images);
+// Discards stored state that no step of pfvi's could have left (from an
+// archive or set by hand: NaN, infinite, a zero step, a scale below 1, a
+// carried part above the doubles' precision): the predictor, the symmetric
+// track and the carried parts start afresh, as after an edit.
+PFVI_INTERNAL void pfvi_discard_implausible(const struct reb_simulation* r, struct pfvi_state* st);
+// The force model as the step starts (kept in step_model), and, after the
+// step, what a callback set during it, applied.
+PFVI_INTERNAL void pfvi_step_model_keep(const struct reb_simulation* r, struct pfvi_state* st);
+PFVI_INTERNAL void pfvi_step_model_apply_pending(struct reb_simulation* r, struct pfvi_state* st);
 // Puts every particle (all fields) and t back to the start of the step.
 PFVI_INTERNAL void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0);
 // Evaluates forces through REBOUND; 0 (rolled back, fault recorded) if they
@@ -687,6 +728,11 @@ struct pfvi_scheme {
     // After a trial: the accelerations of particle i at the step's s nodes.
     void (*stage_accelerations)(const struct reb_simulation* r, const struct pfvi_state* st, size_t i,
             double (*a)[3]);
+    // After the fits: half the trace of the step's linear map of (d, w) for
+    // particle i as fitted, moving in 1-D under the pull a = -W2 d towards
+    // its centre. Above 1 (the determinant is 1) a deviation grows
+    // geometrically, by t + sqrt(t^2 - 1) per step: the step is unstable.
+    double (*half_trace)(const struct pfvi_state* st, size_t i, double h, double W2);
 };
 PFVI_INTERNAL extern const struct pfvi_scheme pfvi_two_point_scheme;  // pfvi_two_point.c
 PFVI_INTERNAL extern const struct pfvi_scheme pfvi_stages_scheme;     // pfvi_stages.c

@@ -94,8 +94,7 @@ void pfvi_centres(const struct reb_particle* p, const struct pfvi_end_state* sta
     }
 }
 
-// sqrt(max(0, -a.d)/|d|^2), with d scaled before squaring.
-static double radial_frequency(const double d[3], const double a[3]){
+double pfvi_radial_frequency(const double d[3], const double a[3]){
     const double s = vector_scale(d);
     if (!(s > 0.) || !isfinite(s)){
         return 0.;
@@ -139,7 +138,7 @@ double pfvi_frequency(const struct pfvi_options* o, const struct reb_particle* p
         case PFVI_FREQUENCY_RADIAL:
         {
             const double d[3] = {p->x - c->x[0], p->y - c->x[1], p->z - c->x[2]};
-            return radial_frequency(d, a);
+            return pfvi_radial_frequency(d, a);
         }
         case PFVI_FREQUENCY_MEAN_MOTION:
             return partner ? mean_motion(p, partner, c->mu) : 0.;

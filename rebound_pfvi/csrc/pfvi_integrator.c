@@ -78,7 +78,7 @@ static struct reb_binarydata_enum_descriptor pfvi_centre_enum[] = { PFVI_CENTRES
 // struct pfvi_state, named after its last part.
 #define PFVI_FIELD(doc, dtype, group, name) \
     { doc, dtype, #name, offsetof(struct pfvi_state, group.name), 0, 0, 0 }
-#define PFVI_OPTION(doc, dtype, name) PFVI_FIELD(doc, dtype, options, name)
+#define PFVI_OPTION(doc, dtype, name) PFVI_FIELD(doc, dtype, settings, name)
 #define PFVI_STATISTIC(doc, dtype, name) PFVI_FIELD("Statistic: " doc, dtype, statistics, name)
 
 static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[] = {
@@ -97,7 +97,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "(same docs, 'What fitting buys'). The seed's schemes as printed are 'phase' and "
       "'phase-literal' with centre = 'origin' and frequency = 'curvature'. "
       "Type: text (REBOUND lists its storage type). Default 'none'.",
-      REB_INT, "fitting", offsetof(struct pfvi_state, options.fitting), 0, 0, pfvi_fitting_enum },
+      REB_INT, "fitting", offsetof(struct pfvi_state, settings.fitting), 0, 0, pfvi_fitting_enum },
     { "Source of the frequency omega, per particle, at the start of each step, from its "
       "position d and velocity w relative to its centre (see centre) and its acceleration a. "
       "With the centre 'partner', a is the partner's attraction: the frequencies are the pair's. "
@@ -112,7 +112,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "|w x a|/|w|^2, the angular rate on the osculating circle; 0 on a straight line or at rest. "
       "'fixed': the field omega, for every "
       "particle. Type: text. Default 'mean-motion'.",
-      REB_INT, "frequency", offsetof(struct pfvi_state, options.frequency), 0, 0, pfvi_frequency_enum },
+      REB_INT, "frequency", offsetof(struct pfvi_state, settings.frequency), 0, 0, pfvi_frequency_enum },
     { "The centre of each particle's harmonic model: the fitted interpolation is applied to "
       "d = q - c(t), with c moving over the step from its position, velocity and acceleration at "
       "the start. 'partner' (default): the barycentre of the particle and its partner, the body j of "
@@ -123,8 +123,11 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "(K&V): the coordinate origin, at rest, so the step depends on the inertial frame. With "
       "gravity off, G = 0 or no other massive body (an external field) a particle's centre is the "
       "origin. Not used with fitting 'none'. Type: text. Default 'partner'.",
-      REB_INT, "centre", offsetof(struct pfvi_state, options.centre), 0, 0, pfvi_centre_enum },
-    PFVI_OPTION("Frequency used when frequency = 'fixed' (code units of 1/time, finite, >= 0). Default 0.",
+      REB_INT, "centre", offsetof(struct pfvi_state, settings.centre), 0, 0, pfvi_centre_enum },
+    PFVI_OPTION("Frequency used when frequency = 'fixed' (code units of 1/time, finite, >= 0). A fitted "
+        "step far from the motion's frequency adds a repulsive force it does not show: each step with a "
+        "fixed omega is checked on every particle's pull towards its centre and refused, naming the "
+        "particle, where a deviation would grow. Default 0.",
         REB_DOUBLE, omega),
     PFVI_OPTION("Number s of Gauss-Lobatto nodes of the discrete Lagrangian, an integer from "
         PFVI_STR(PFVI_STAGES_MIN) " to " PFVI_STR(PFVI_STAGES_MAX) "; the order is "
@@ -197,7 +200,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "Hut, Makino & McMillan 1995 (ApJ 443, L93); it costs about 3 to 5 trial steps per step "
       "(n_attempts), and near pericentre and apocentre the two directions may pick different "
       "steps. Type: text. Default 'symmetric'.",
-      REB_INT, "step_control", offsetof(struct pfvi_state, options.step_control), 0, 0, pfvi_step_control_enum },
+      REB_INT, "step_control", offsetof(struct pfvi_state, settings.step_control), 0, 0, pfvi_step_control_enum },
     { "", REB_POINTER, "compensation", offsetof(struct pfvi_state, compensation),
         offsetof(struct pfvi_state, N_compensation), sizeof(struct pfvi_compensation), 0 },
     { "", REB_POINTER, "stage_accelerations", offsetof(struct pfvi_state, predictor_a),
@@ -268,7 +271,7 @@ static void* pfvi_create(void){
     if (!st){
         return NULL;
     }
-    st->options = (struct pfvi_options){
+    st->settings = (struct pfvi_options){
         .fitting = PFVI_FITTING_NONE,
         .frequency = PFVI_FREQUENCY_MEAN_MOTION,
         .stages = PFVI_STAGES_DEFAULT,
@@ -278,14 +281,23 @@ static void* pfvi_create(void){
         .step_control = PFVI_STEP_CONTROL_SYMMETRIC,
         .centre = PFVI_CENTRE_PARTNER,
     };
+    st->options = st->settings;
     st->density_scale = 1.;
     st->track_at_end = 1;
     return st;
 }
 
 static void pfvi_free(void* state){
-    if (state){
-        pfvi_state_free(state);
+    struct pfvi_state* const st = state;
+    if (st && st->in_step != PFVI_STEP_IDLE){
+        // A force callback (or heartbeat of a step in progress) switched or
+        // re-assigned the integrator: the step still uses this state. It
+        // ends as if the change had come after it; then the state goes.
+        st->free_pending = 1;
+        return;
+    }
+    if (st){
+        pfvi_state_free(st);
     }
 }
 
@@ -367,6 +379,17 @@ static void pfvi_report(struct reb_simulation* r, const struct pfvi_state* st){
             pfvi_error(r, "pfvi: the reversible step equation from t = %.17g was not solved in %d trial steps "
                     "(last dt = %.6g, estimate/epsilon = %.3g); step not taken, state restored. Try "
                     "step_control = 'seed' or a larger epsilon.", f->t0, (int)f->rounds, f->h, f->value);
+            break;
+        case PFVI_FAULT_UNSTABLE:
+            pfvi_error(r, "pfvi: particle %zu: the %zu-stage step fitted to the fixed omega = %.6g is unstable at "
+                    "dt = %.6g against the pull it feels (frequency %.6g): a deviation grows by a factor 1 + %.3g "
+                    "per step; step not taken, state restored. Use an omega near the motion's, a smaller dt, or "
+                    "frequency = 'curvature'.", f->particle, f->n, f->value, f->h, f->bound, f->growth);
+            break;
+        case PFVI_FAULT_CALLBACK_CHANGED:
+            pfvi_error(r, "pfvi: a callback replaced additional_forces, gravity_custom or extras during the step "
+                    "(force evaluation at t = %.17g); step not taken, state restored. Change them between "
+                    "steps (a heartbeat, or between integrate() calls).", f->t);
             break;
         case PFVI_FAULT_NONE:
             pfvi_error(r, "pfvi: step not taken (no cause recorded).");
@@ -497,6 +520,7 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
             }
         }
         pfvi_forget_edited(r, st);
+        pfvi_discard_implausible(r, st);
     }
     // The density the last step found at its end holds here if the state,
     // the force model and the accelerations are that end's, bit for bit.
@@ -572,9 +596,10 @@ static double pfvi_fixed_step(struct reb_simulation* r, struct pfvi_state* st, s
 }
 
 static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
-    if (!pfvi_options_valid(r, &st->options)){
+    if (!pfvi_options_valid(r, &st->settings)){
         return;
     }
+    st->options = st->settings;  // what this step runs with, whatever a callback sets during it
     const double t0 = r->t;
     const size_t N = r->N;
     if (N == 0){
@@ -623,10 +648,26 @@ static void pfvi_step(struct reb_simulation* r, void* state){
         reb_simulation_error(r, "pfvi: integrator state missing (allocation failed).");
         return;
     }
+    if (st->in_step != PFVI_STEP_IDLE){
+        // steps() or integrate() from a callback during a step: the running
+        // step owns the state.
+        reb_simulation_error(r, "pfvi: a step was asked for while one is running (steps() or integrate() "
+                "called from a callback during a step); not taken. The running step goes on.");
+        st->reentry_refused = 1;
+        return;
+    }
     st->in_step = PFVI_STEP_RUNNING;
+    st->reentry_refused = 0;
+    st->status_at_start = (int)r->status;
+    st->dt_at_start = r->dt;
     st->step_N = r->N;
+    pfvi_step_model_keep(r, st);
     pfvi_step_take(r, st);
+    pfvi_step_model_apply_pending(r, st);
     st->in_step = PFVI_STEP_IDLE;
+    if (st->free_pending){
+        pfvi_state_free(st);
+    }
 }
 
 int pfvi_register(void){

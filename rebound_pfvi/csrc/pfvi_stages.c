@@ -428,6 +428,93 @@ static void stages_commit(struct reb_simulation* r, struct pfvi_state* st, size_
     st->retry_valid = 0;  // stage_a now holds the predictor's old buffer
 }
 
+// Half the trace of the step's map for a 1-D particle under a = -W2 d
+// about a centre at rest: the stage equations above with that force are
+// linear in the unknowns, y + kappa S d(y) = yc with kappa = u^2 - W2 h^2
+// (the force the iteration carries, h^2 a + u2 d), solved here directly for
+// the start (d, w) = (1, 0) (for x_k+1) and (0, 1) (for w_k+1).
+static double stages_half_trace(const struct pfvi_state* st, size_t i, double h, double W2){
+    const struct pfvi_stage_fit* const f = &st->stage_fit[i];
+    const int s = st->rule.s, m = s - 1;
+    const double kappa = f->u2 - W2*h*h;
+    // d^k = d0 dk0[k] + sum_j dky[k][j] y_j (stage point k, less the centre).
+    double dk0[PFVI_STAGES_MAX], dky[PFVI_STAGES_MAX][PFVI_STAGES_MAX-1] = {{0.}};
+    for (int k=0; k<s; k++){
+        dk0[k] = (k == 0 || k == m) ? 1. : 1. + f->beta_m[k];
+        if (k > 0){
+            dky[k][0] = (k == m) ? 1. : f->bbar[k];
+        }
+        if (k > 0 && k < m){
+            dky[k][k] = 1.;
+        }
+    }
+    double A[PFVI_STAGES_MAX-1][PFVI_STAGES_MAX-1];
+    double rhs[2][PFVI_STAGES_MAX-1];
+    for (int l=0; l<m; l++){
+        double forced = 0.;
+        for (int j=0; j<m; j++){
+            double sum = 0.;
+            for (int k=0; k<s; k++){
+                sum += f->solve[l][k]*dky[k][j];
+            }
+            A[l][j] = (l == j) + kappa*sum;
+        }
+        for (int k=0; k<s; k++){
+            forced += f->solve[l][k]*dk0[k];
+        }
+        rhs[0][l] = -f->start_offset[l] - kappa*forced;  // d0 = 1, w0 = 0
+        rhs[1][l] = -f->G*h*f->start_momentum[l];        // d0 = 0, w0 = 1
+    }
+    // Gaussian elimination with partial pivoting, both right-hand sides.
+    for (int k=0; k<m; k++){
+        int p = k;
+        for (int l=k+1; l<m; l++){
+            p = (fabs(A[l][k]) > fabs(A[p][k])) ? l : p;
+        }
+        for (int j=0; j<m; j++){
+            const double tmp = A[k][j]; A[k][j] = A[p][j]; A[p][j] = tmp;
+        }
+        for (int c=0; c<2; c++){
+            const double tmp = rhs[c][k]; rhs[c][k] = rhs[c][p]; rhs[c][p] = tmp;
+        }
+        if (A[k][k] == 0.){
+            return NAN;
+        }
+        for (int l=k+1; l<m; l++){
+            const double g = A[l][k]/A[k][k];
+            for (int j=k; j<m; j++){
+                A[l][j] -= g*A[k][j];
+            }
+            rhs[0][l] -= g*rhs[0][k];
+            rhs[1][l] -= g*rhs[1][k];
+        }
+    }
+    double y[2][PFVI_STAGES_MAX-1];
+    for (int c=0; c<2; c++){
+        for (int k=m-1; k>=0; k--){
+            double sum = rhs[c][k];
+            for (int j=k+1; j<m; j++){
+                sum -= A[k][j]*y[c][j];
+            }
+            y[c][k] = sum/A[k][k];
+        }
+    }
+    // x_k+1 from (1, 0): d0 + y_0. w_k+1 from (0, 1): 1 + dv/(G h), dv as in
+    // stages_advance with h^2 a^k = -W2 h^2 d^k.
+    double dv = 0.;
+    for (int k=0; k<s; k++){
+        double qd = f->Bbar[k]*y[1][0], d = 0.;
+        for (int l=1; l<m; l++){
+            qd += f->a[k][l]*y[1][l];
+        }
+        for (int j=0; j<m; j++){
+            d += dky[k][j]*y[1][j];
+        }
+        dv += st->rule.w[k]*(f->beta_d[k]*qd - (1. + f->beta_m[k])*W2*h*h*d);
+    }
+    return 0.5*((1. + y[0][0]) + (1. + dv/(f->G*h)));
+}
+
 static void stages_stage_accelerations(const struct reb_simulation* r, const struct pfvi_state* st, size_t i,
         double (*a)[3]){
     (void)r;
@@ -446,4 +533,5 @@ const struct pfvi_scheme pfvi_stages_scheme = {
     .advance = stages_advance,
     .commit = stages_commit,
     .stage_accelerations = stages_stage_accelerations,
+    .half_trace = stages_half_trace,
 };

@@ -174,6 +174,40 @@ static int force_model_unchanged(const struct reb_simulation* r, const struct pf
     return !changed;
 }
 
+// Writes a kept force model's numbers back into REBOUND (not its pointers).
+static void force_model_restore_numbers(struct reb_simulation* r, const struct pfvi_force_model* m){
+#define PFVI_PUT(field, member) r->member = m->field;
+#define PFVI_PUT_INT(field, member) r->member = (__typeof__(r->member))m->field;
+#define PFVI_SKIP(field, member)
+    PFVI_FORCE_MODEL_FIELDS(PFVI_PUT, PFVI_PUT, PFVI_PUT_INT, PFVI_SKIP)
+#undef PFVI_PUT
+#undef PFVI_PUT_INT
+#undef PFVI_SKIP
+}
+
+// Whether a kept model's pointers (callbacks, extras) are REBOUND's now.
+static int force_model_same_pointers(const struct reb_simulation* r, const struct pfvi_force_model* m){
+    int changed = 0;
+#define PFVI_SKIP(field, member)
+#define PFVI_SAME(field, member) changed |= (m->field != r->member);
+    PFVI_FORCE_MODEL_FIELDS(PFVI_SKIP, PFVI_SKIP, PFVI_SKIP, PFVI_SAME)
+#undef PFVI_SKIP
+#undef PFVI_SAME
+    return !changed;
+}
+
+void pfvi_step_model_keep(const struct reb_simulation* r, struct pfvi_state* st){
+    force_model_keep(r, &st->step_model);
+    st->model_pending = 0;
+}
+
+void pfvi_step_model_apply_pending(struct reb_simulation* r, struct pfvi_state* st){
+    if (st->model_pending){
+        force_model_restore_numbers(r, &st->pending_model);
+        st->model_pending = 0;
+    }
+}
+
 int pfvi_end_is_start(const struct reb_simulation* r, const struct pfvi_state* st){
     return st->cache_N == r->N && pfvi_state_is_end(r, st);
 }
@@ -277,6 +311,50 @@ int pfvi_field_of(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_f
     return 1;
 }
 
+void pfvi_discard_implausible(const struct reb_simulation* r, struct pfvi_state* st){
+    // The predictor: a step of its own, at a finite time, with finite stages.
+    int predictor = st->predictor_stages != 0;
+    predictor &= isfinite(st->predictor_h) && st->predictor_h != 0. && isfinite(st->predictor_t);
+    predictor &= st->predictor_stages >= PFVI_STAGES_MIN && st->predictor_stages <= PFVI_STAGES_MAX;
+    const size_t n = (st->predictor_N <= st->N_allocated) ? st->predictor_N : 0;
+    for (size_t i=0; predictor && i<n; i++){
+        for (int k=0; k<st->predictor_stages; k++){
+            for (int c=0; c<3; c++){
+                predictor &= isfinite(st->predictor_a[i][k][c]) && isfinite(st->predictor_x[i][k][c]);
+            }
+        }
+    }
+    if (!predictor){
+        st->predictor_stages = 0;
+    }
+    // The symmetric track, its scale and the time's carried rounding.
+    if (!(st->rho > 0. && isfinite(st->rho)) || !(st->rho_sign == 1. || st->rho_sign == -1.)
+            || !(st->track_done >= 0. && isfinite(st->track_done)) || !(st->track_kappa > 0. && isfinite(st->track_kappa))){
+        st->rho = 0.;
+    }
+    if (!(st->density_scale >= 1. && isfinite(st->density_scale))){
+        st->density_scale = 1.;
+    }
+    if (!(fabs(st->t_compensation) <= 1e-9*fmax(1., fabs(r->t)))){
+        st->t_compensation = 0.;
+    }
+    // The carried low-order parts of x and v: below the coordinates' own precision.
+    const struct reb_particle* const ps = r->particles;
+    const size_t m = (st->N_compensation <= r->N) ? st->N_compensation : 0;
+    for (size_t i=0; i<m; i++){
+        const double x[3] = {ps[i].x, ps[i].y, ps[i].z}, v[3] = {ps[i].vx, ps[i].vy, ps[i].vz};
+        const struct pfvi_compensation* const comp = &st->compensation[i];
+        int plausible = 1;
+        for (int c=0; c<3; c++){
+            plausible &= fabs(comp->x[c]) <= 1e-10*fmax(fabs(x[c]), DBL_MIN) + DBL_MIN;
+            plausible &= fabs(comp->v[c]) <= 1e-10*fmax(fabs(v[c]), DBL_MIN) + DBL_MIN;
+        }
+        if (!plausible){
+            st->compensation[i] = (struct pfvi_compensation){{0., 0., 0.}, {0., 0., 0.}};
+        }
+    }
+}
+
 void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
     memcpy(r->particles, st->start, N*sizeof(struct reb_particle));
     r->t = t0;
@@ -356,9 +434,28 @@ static void pfvi_roll_back_changed_N(struct reb_simulation* r, struct pfvi_state
 int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
     reb_simulation_update_acceleration(r);
     st->statistics.n_force_evaluations++;
+    if (st->reentry_refused){
+        r->status = (enum REB_STATUS)st->status_at_start;
+        r->dt = st->dt_at_start;
+        st->reentry_refused = 0;
+    }
     if (r->N != N){
         pfvi_roll_back_changed_N(r, st, N, t0);
         return 0;
+    }
+    if (!force_model_unchanged(r, &st->step_model)){
+        // A callback changed the force model during the step. Its numbers
+        // (G, softening, N_active, the gravity mode, ...) act from the next
+        // step: kept aside, and the step's restored. A replaced callback
+        // cannot be restored (the old one may be gone): the step is refused.
+        if (!force_model_same_pointers(r, &st->step_model)){
+            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_CALLBACK_CHANGED, .t = r->t};
+            pfvi_roll_back(r, st, N, t0);
+            return 0;
+        }
+        force_model_keep(r, &st->pending_model);
+        st->model_pending = 1;
+        force_model_restore_numbers(r, &st->step_model);
     }
     const struct reb_particle* const ps = r->particles;
     double sum = 0.;  // as in pfvi_first_not_finite

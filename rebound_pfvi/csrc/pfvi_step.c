@@ -12,6 +12,39 @@ static const struct pfvi_scheme* pfvi_scheme_of(const struct pfvi_state* st){
     return (st->options.stages == 2) ? &pfvi_two_point_scheme : &pfvi_stages_scheme;
 }
 
+// A frequency taken from the motion (curvature, radial, mean motion) agrees
+// with the pull a particle feels to within its orbit's shape; a fixed one can
+// be anything (issue 27), and a fitted step whose harmonic part is far from
+// the motion's can grow a deviation geometrically (docs/method.md). So with
+// a fixed omega each particle's step, as fitted, is checked on the pull it
+// feels at the start, a = -W^2 d towards its centre: a step whose map of
+// (d, w) is unstable is refused (rolled back, fault recorded). A particle at
+// its centre has no W and is not checked.
+static int fixed_frequency_stable(struct reb_simulation* r, struct pfvi_state* st, const struct pfvi_scheme* scheme,
+        size_t N, double t0, double h){
+    const struct reb_particle* const p0 = st->start;
+    for (size_t i=0; i<N; i++){
+        const struct pfvi_centre* const c = &st->centre[i];
+        const double d[3] = {p0[i].x - c->x[0], p0[i].y - c->x[1], p0[i].z - c->x[2]};
+        if (d[0] == 0. && d[1] == 0. && d[2] == 0.){
+            continue;
+        }
+        const double* const a = st->end[i].a;
+        const double relative[3] = {a[0] - c->acc[0], a[1] - c->acc[1], a[2] - c->acc[2]};
+        const double W = pfvi_radial_frequency(d, relative);
+        const double half_trace = scheme->half_trace(st, i, h, W*W);
+        if (fabs(half_trace) > 1. + PFVI_STABILITY_SLACK){
+            pfvi_roll_back(r, st, N, t0);
+            const double t = fabs(half_trace);
+            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_UNSTABLE, .particle = i, .h = h, .t0 = t0,
+                .value = scheme->fitted_omega(st, i), .bound = W, .n = (size_t)st->options.stages,
+                .growth = (t - 1.) + sqrt((t - 1.)*(t + 1.))};
+            return 0;
+        }
+    }
+    return 1;
+}
+
 enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){
     const struct pfvi_scheme* const scheme = pfvi_scheme_of(st);
     st->statistics.n_attempts++;
@@ -46,6 +79,11 @@ enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* st,
         const double fitted = scheme->fitted_omega(st, i);
         omega_min = fmin(omega_min, fitted);
         omega_max = fmax(omega_max, fitted);
+    }
+
+    if (st->options.frequency == PFVI_FREQUENCY_FIXED && st->options.fitting != PFVI_FITTING_NONE
+            && !fixed_frequency_stable(r, st, scheme, N, t0, h)){
+        return PFVI_TRIAL_ERROR;
     }
 
     const enum pfvi_trial trial = scheme->advance(r, st, N, t0, h);

@@ -202,6 +202,17 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
     return PFVI_TRIAL_OK;
 }
 
+// Half the trace of the step's map of (d, w) for a 1-D particle pulled
+// towards its centre at frequency W: kick with (omega^2 - W^2) d, rotate,
+// kick again gives cos u - (W^2/omega^2 - 1) sin u tan u/2, u = omega h,
+// written so that omega = 0 (Verlet) needs no division.
+static double two_point_half_trace(const struct pfvi_state* st, size_t i, double h, double W2){
+    const struct pfvi_two_point_fit* const f = &st->fit[i];
+    const double cos_u = f->keep + f->cos_u_m_keep;
+    // sin u tan u = omega sin u * (h sinc u)/cos u; (W h sinc u)^2/cos u.
+    return cos_u + 0.5*(f->omega_sin_u*f->h_sinc_u - W2*f->h_sinc_u*f->h_sinc_u)/cos_u;
+}
+
 // The step is taken: keep what the sums of x and v lost.
 static void two_point_commit(struct reb_simulation* r, struct pfvi_state* st, size_t N, double h){
     (void)h;
@@ -242,4 +253,5 @@ const struct pfvi_scheme pfvi_two_point_scheme = {
     .advance = two_point_advance,
     .commit = two_point_commit,
     .stage_accelerations = two_point_stage_accelerations,
+    .half_trace = two_point_half_trace,
 };
