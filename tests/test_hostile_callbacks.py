@@ -262,11 +262,15 @@ def test_the_stage_schemes_growth_is_their_step_maps():
 
 @pytest.mark.parametrize("field, value", [("predictor_h", float("nan")), ("predictor_h", 1e-300),
                                           ("density_scale", -1.0), ("density_scale", float("inf")),
-                                          ("rho", float("nan")), ("track_done", float("nan")),
-                                          ("t_compensation", 1e300)])
+                                          ("density_scale", 1e300), ("rho", float("nan")), ("rho", 1e5),
+                                          ("rho", 1e8), ("rho", 1e300), ("rho", 1e-300),
+                                          ("track_done", float("nan")), ("t_compensation", 1e300)])
 def test_damaged_stored_state_is_discarded(tmp_path, field, value):
     # predictor_h = NaN or 1e-300 made every later step refuse ("particle 0's
-    # position overflowed"), and lowering dt 100x did not help.
+    # position overflowed"), and lowering dt 100x did not help; rho = 1e8
+    # (the track keeps any multiple of the density) took 1e6 steps per 0.01
+    # time units, forever; rho = 1e300 or 1e-300 and density_scale = 1e300
+    # refused every step with messages about dt, overflow or convergence.
     sim = sun_and_planet(stages=4, epsilon=1e-8)
     sim.integrate(0.3)
     setattr(sim.integrator, field, value)
@@ -278,8 +282,38 @@ def test_damaged_stored_state_is_discarded(tmp_path, field, value):
     reference.integrator = "ias15"
     reference.integrate(2.0)
     for run in (sim, loaded):
+        steps = run.integrator.n_steps
         run.integrate(2.0)
         assert math.dist((run.particles[1].x, run.particles[1].y), (reference.particles[1].x, reference.particles[1].y)) < 1e-7
+        assert run.integrator.n_steps - steps < 2000  # an undamaged run takes 720 from 0.3 to 2
+
+
+@pytest.mark.parametrize("stages", [2, 4, 8])
+@pytest.mark.parametrize("edit", ["m", "x", "vx", "t"])
+def test_a_particle_edited_in_a_callback_during_a_step_is_refused(stages, edit):
+    # A mass changed at the third force evaluation was wiped by the retaken
+    # step (s = 8), blended into a fixed step, or refused as "the 2-stage
+    # solve did not converge"; positions, velocities and t set in a callback
+    # were silently overwritten. An edit inside a step has no between-steps
+    # equivalent (between which stage points?): refused, every particle and
+    # t as the step found them, the edit undone too.
+    def change(s):
+        if edit == "t":
+            s.t += 0.5
+        else:
+            p = s.particles[1]
+            setattr(p, edit, getattr(p, edit) * 1.5 + 1e-3)
+
+    sim = sun_and_planet(stages=stages, epsilon=1e-6)
+    on_call(sim, 7, change)
+    with pytest.raises(RuntimeError, match=(r"changed sim\.t during the step" if edit == "t" else
+                                            rf"changed particle 1's {edit} during the step")):
+        sim.integrate(1.0)
+    reference = sun_and_planet(stages=stages, epsilon=1e-6)
+    reference.additional_forces = lambda simp: None
+    if sim.integrator.n_steps:
+        reference.steps(sim.integrator.n_steps)
+    assert state(sim) == state(reference)
 
 
 @pytest.mark.parametrize("field, value", [("stages", 2**32 + 4), ("fitting", 2**32 + 3), ("stages", 2**31),
@@ -333,6 +367,8 @@ SCRIPT = textwrap.dedent('''
                 s.steps(1)
             except RuntimeError:
                 pass
+        elif kind == "edit":
+            setattr(s.particles[1], value, getattr(s.particles[1], value) * 1.01)
 
     def snapshot(sim):
         return [sim.t] + [[getattr(q, f) for f in ("x", "y", "z", "vx", "vy", "vz", "m")] for q in sim.particles]
@@ -410,7 +446,8 @@ def test_hostile_callbacks_property():
         st.tuples(st.just("model"), st.sampled_from([("G", 1.02), ("softening", 1e-3), ("N_active", 2),
                                                      ("gravity", "compensated"), ("gravity", "none")])),
         st.tuples(st.just("integrator"), st.sampled_from(["ias15", "leapfrog", "pfvi"])),
-        st.tuples(st.sampled_from(["add", "remove", "raise", "steps"]), st.none()))
+        st.tuples(st.sampled_from(["add", "remove", "raise", "steps"]), st.none()),
+        st.tuples(st.just("edit"), st.sampled_from(["m", "x", "vy"])))
 
     @hypothesis.settings(max_examples=40, deadline=None, derandomize=True, database=None)
     @hypothesis.given(action=actions, call=st.integers(1, 40), stages=st.sampled_from([2, 4, 8]),
@@ -426,6 +463,12 @@ def test_hostile_callbacks_property():
             # its step and leaves status "success", which ends the outer
             # integrate() (IAS15 alike, t = 0.02 of 0.5). Not pfvi's to change.
             assert result["outcome"] == "finished"
+            return
+        if where == "force" and action[0] == "edit":
+            # Refused in the step it happened in, the edit undone: the state
+            # that step started from.
+            assert "during the step" in result["outcome"], result["outcome"]
+            assert result["state"] == result["start"]
             return
         if where == "force" and action[0] in ("add", "remove"):
             # Refused in the step it happened in: t and every particle still

@@ -169,6 +169,17 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 #define PFVI_RESOLUTION_MAX 3.
 #define PFVI_RESOLUTION_RETRIES 5
 #define PFVI_RESOLUTION_SLACK 2.0
+// The track's rho follows lambda sigma to within the lag of its update:
+// measured over every scene of benchmarks/step_control.py (s = 4 and 8,
+// epsilon 1e-6 and 1e-10), rho/(lambda sigma) lay in [0.30, 2.28]. The
+// update keeps that ratio (rho tracks any constant times sigma), so a rho
+// stored outside [1/TRACK_RATIO_MAX, TRACK_RATIO_MAX] lambda sigma (set by
+// hand, or an edited archive) would never come back: the track starts afresh.
+#define PFVI_TRACK_RATIO_MAX 16.
+// lambda (density_scale) at most: steps 1e12 times shorter than the density
+// asks are no time scale a REBOUND run resolves; a stored value above it is
+// discarded, and the retakes never raise lambda past it.
+#define PFVI_DENSITY_SCALE_MAX 1e12
 // REBOUND's sim.dt of a new simulation (reb_simulation_create): not taken
 // as a cap on the first step of the symmetric control.
 #define PFVI_REBOUND_DT_DEFAULT 0.001
@@ -505,6 +516,7 @@ enum pfvi_fault_kind {
     PFVI_FAULT_UNSOLVED,        // t0, rounds: trials, h, value: F
     PFVI_FAULT_UNSTABLE,        // particle, h, n, value: omega, bound: its pull's frequency, growth: factor per step - 1
     PFVI_FAULT_CALLBACK_CHANGED,// t: a callback replaced additional_forces, gravity_custom or extras
+    PFVI_FAULT_PARTICLE_EDITED, // t, particle (SIZE_MAX: t itself), flag: which field (pfvi_written_fields)
 };
 struct pfvi_fault {
     enum pfvi_fault_kind kind;
@@ -522,6 +534,13 @@ struct pfvi_fault {
     uint64_t rounds;
     int flag;
 };
+
+// A particle as pfvi set it before a force evaluation: a callback that edits
+// any of these during a step (not between steps) has the step refused.
+struct pfvi_written {
+    double value[7];    // x, y, z, vx, vy, vz, m
+};
+#define PFVI_WRITTEN_FIELDS {"x", "y", "z", "vx", "vy", "vz", "m"}
 
 // Integrator state: settings, statistics and the controller's state are
 // REBOUND fields (saved in archives); the scratch grows only with N.
@@ -572,6 +591,7 @@ struct pfvi_state {
     struct pfvi_end_state* end;    // end of the last step, with its accelerations (force reuse)
     struct pfvi_two_point_fit* fit;// per-particle coefficients of the current two-point step
     struct reb_vec3d* v_rotated;   // velocities before the final kick (velocity-dependent forces)
+    struct pfvi_written* written;  // what pfvi set before a force evaluation (a callback may not edit it)
     struct reb_vec3d* dx;          // position increment of the step, with the carried low-order part
     struct reb_vec3d* dv;          // velocity increment of the step, with the carried low-order part
     // Compensated summation: the low-order parts of x, y, z, vx, vy, vz that

@@ -303,6 +303,19 @@ static int symmetric_on_track(const struct pfvi_state* st, double kappa){
         && (st->rho_sign == 1. || st->rho_sign == -1.);
 }
 
+// A track no step could have left (rho far from lambda sigma, lambda out of
+// range: set by hand or read from an edited archive) is discarded.
+static void symmetric_discard_implausible(struct pfvi_state* st, double sigma){
+    if (!(st->density_scale >= 1. && st->density_scale <= PFVI_DENSITY_SCALE_MAX)){
+        st->density_scale = 1.;
+        st->rho = 0.;
+    }
+    const double ratio = st->rho/(st->density_scale*sigma);
+    if (st->rho != 0. && !(ratio >= 1./PFVI_TRACK_RATIO_MAX && ratio <= PFVI_TRACK_RATIO_MAX)){
+        st->rho = 0.;
+    }
+}
+
 // The track at a step in direction `sign` from a state of density sigma and
 // rate g: a retrace on a reversal, the rest of an interval a capped step
 // left, the next interval (the Hairer & Soderlind update), or a fresh start.
@@ -411,6 +424,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         st->statistics.error_estimate = 0.;
         return h;
     }
+    symmetric_discard_implausible(st, sigma0);
     struct track_position t = symmetric_position(st, sign, kappa, sigma0, g0);
     const double dt = fabs(r->dt);
     const int uncapped = (symmetric_on_track(st, kappa) && (dt == fabs(st->dt_proposed) || dt == fabs(st->dt_last_full)))
@@ -456,7 +470,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
                 // The step that resolves the forces as the density should
                 // have: the interval starts afresh here, lambda times denser.
                 retakes++;
-                const double scale = 1./fmin(0.5, u_target/u);
+                const double scale = fmin(1./fmin(0.5, u_target/u), PFVI_DENSITY_SCALE_MAX/lambda);
                 lambda *= scale;
                 t.rho *= scale;
                 t.length = kappa/t.rho;

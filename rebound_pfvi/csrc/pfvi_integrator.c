@@ -391,6 +391,19 @@ static void pfvi_report(struct reb_simulation* r, const struct pfvi_state* st){
                     "(force evaluation at t = %.17g); step not taken, state restored. Change them between "
                     "steps (a heartbeat, or between integrate() calls).", f->t);
             break;
+        case PFVI_FAULT_PARTICLE_EDITED:
+            if (f->particle == SIZE_MAX){
+                pfvi_error(r, "pfvi: a callback changed sim.t during the step (force evaluation at t = %.17g); "
+                        "step not taken, t and every particle restored. Change t between steps (a heartbeat, "
+                        "or between integrate() calls).", f->t);
+            }else{
+                static const char* const fields[] = PFVI_WRITTEN_FIELDS;
+                pfvi_error(r, "pfvi: a callback changed particle %zu's %s during the step (force evaluation at "
+                        "t = %.17g); step not taken, t and every particle restored (the edit too). Edit "
+                        "particles between steps (a heartbeat, or between integrate() calls).",
+                        f->particle, fields[f->flag], f->t);
+            }
+            break;
         case PFVI_FAULT_NONE:
             pfvi_error(r, "pfvi: step not taken (no cause recorded).");
             break;

@@ -19,6 +19,7 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->end);
     free(st->fit);
     free(st->v_rotated);
+    free(st->written);
     free(st->dx);
     free(st->dv);
     free(st->compensation);
@@ -77,6 +78,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->end = pfvi_grow(st->end, N*sizeof(*st->end), &ok);
     st->fit = pfvi_grow(st->fit, N*sizeof(*st->fit), &ok);
     st->v_rotated = pfvi_grow(st->v_rotated, N*sizeof(*st->v_rotated), &ok);
+    st->written = pfvi_grow(st->written, N*sizeof(*st->written), &ok);
     st->dx = pfvi_grow(st->dx, N*sizeof(*st->dx), &ok);
     st->dv = pfvi_grow(st->dv, N*sizeof(*st->dv), &ok);
     st->stage_fit = pfvi_grow(st->stage_fit, N*sizeof(*st->stage_fit), &ok);
@@ -332,7 +334,7 @@ void pfvi_discard_implausible(const struct reb_simulation* r, struct pfvi_state*
             || !(st->track_done >= 0. && isfinite(st->track_done)) || !(st->track_kappa > 0. && isfinite(st->track_kappa))){
         st->rho = 0.;
     }
-    if (!(st->density_scale >= 1. && isfinite(st->density_scale))){
+    if (!(st->density_scale >= 1. && st->density_scale <= PFVI_DENSITY_SCALE_MAX)){
         st->density_scale = 1.;
     }
     if (!(fabs(st->t_compensation) <= 1e-9*fmax(1., fabs(r->t)))){
@@ -431,7 +433,46 @@ static void pfvi_roll_back_changed_N(struct reb_simulation* r, struct pfvi_state
     st->fault.flag = 1;
 }
 
+// The particles' fields and t as pfvi set them for a force evaluation.
+static void written_keep(const struct reb_simulation* r, struct pfvi_state* st, size_t N){
+    const struct reb_particle* const ps = r->particles;
+    for (size_t i=0; i<N; i++){
+        const struct reb_particle* const p = &ps[i];
+        st->written[i] = (struct pfvi_written){{p->x, p->y, p->z, p->vx, p->vy, p->vz, p->m}};
+    }
+}
+
+// The first field a callback changed during the evaluation: 1 (fault
+// recorded) or 0. Compared bit for bit (a NaN written is a change, too).
+static int written_changed(const struct reb_simulation* r, struct pfvi_state* st, size_t N, double t){
+    if (memcmp(&r->t, &t, sizeof(t)) != 0){
+        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_PARTICLE_EDITED, .particle = SIZE_MAX, .t = t};
+        return 1;
+    }
+    const struct reb_particle* const ps = r->particles;
+    for (size_t i=0; i<N; i++){
+        const struct reb_particle* const p = &ps[i];
+        const double now[7] = {p->x, p->y, p->z, p->vx, p->vy, p->vz, p->m};
+        if (memcmp(now, st->written[i].value, sizeof(now)) != 0){
+            int k = 0;
+            while (k < 6 && memcmp(&now[k], &st->written[i].value[k], sizeof(double)) == 0){
+                k++;
+            }
+            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_PARTICLE_EDITED, .particle = i, .t = t, .flag = k};
+            return 1;
+        }
+    }
+    return 0;
+}
+
 int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
+    // Only user code (a force callback, custom gravity) can edit particles
+    // during an evaluation; REBOUND's own gravity does not.
+    const int guarded = r->additional_forces != NULL || r->gravity == REB_GRAVITY_CUSTOM;
+    const double t = r->t;
+    if (guarded){
+        written_keep(r, st, N);
+    }
     reb_simulation_update_acceleration(r);
     st->statistics.n_force_evaluations++;
     if (st->reentry_refused){
@@ -441,6 +482,12 @@ int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, si
     }
     if (r->N != N){
         pfvi_roll_back_changed_N(r, st, N, t0);
+        return 0;
+    }
+    if (guarded && written_changed(r, st, N, t)){
+        // A callback edited a particle or t inside the step: what it meant
+        // ("between" which stage points?) has no between-steps equivalent.
+        pfvi_roll_back(r, st, N, t0);
         return 0;
     }
     if (!force_model_unchanged(r, &st->step_model)){
