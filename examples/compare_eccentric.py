@@ -20,10 +20,11 @@ def main():
     scene = scenes.Kepler(e=0.9, a=2 * u.AU, mass=0.8 * u.Msun, m=1 * u.Mjup, periods=20)
     print(f"{scene.describe()} - period {scene.period_quantity().to(u.day):.1f}")
 
-    # The default sweep, or pick settings yourself, e.g.
-    #   compare.Setting("pfvi", 1e-8, (("stages", 6), ("fitting", "none")))
+    # The default sweep, or pick settings yourself: an option not named is
+    # pfvi's default (rebound_pfvi.DEFAULTS), e.g. s = 6 at epsilon 1e-8:
+    #   compare.Setting("pfvi", 1e-8, (("stages", 6),))
     settings = compare.default_settings(scene, "quick")
-    settings.append(compare.Setting("pfvi", 1e-8, (("stages", 6), ("fitting", "none"))))
+    settings.append(compare.Setting("pfvi", 1e-8, (("stages", 6),)))
 
     results = compare.run(scene, settings, repeats=3)  # a local process pool; Ctrl-C keeps finished runs
     table = results.table()  # astropy QTable: wall_time in s, position_error in AU (and km)
@@ -40,7 +41,7 @@ def main():
     # Your own REBOUND simulation with pfvi, as with any integrator (rebound_pfvi is
     # imported above, which registers "pfvi"):
     sim = scene.build()
-    sim.integrator = "pfvi"
+    sim.integrator = "pfvi"             # its defaults: s = 8, symmetric steps
     sim.integrator.epsilon = 1e-8
     sim.integrate(scene.t_end)
     print("pfvi: steps", sim.integrator.n_steps, "trial steps", sim.integrator.n_attempts)

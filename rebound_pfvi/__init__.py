@@ -1,22 +1,24 @@
 """rebound_pfvi: a phase-fitted discrete Lagrangian integrator for REBOUND.
 
-Importing this package registers the integrator "pfvi" with REBOUND::
+A variational integrator after O. T. Kosmas and D. S. Vlachos,
+"Phase-fitted Discrete Lagrangian Integrators": s Gauss-Lobatto nodes (order
+2s - 2), an interpolation that can be fitted to a local frequency, and a
+time-symmetric step control sized from every orbit's and encounter's time
+scale. Importing this package registers the integrator "pfvi" with REBOUND::
 
     import rebound
     import rebound_pfvi
 
     sim = rebound.Simulation()
     sim.add(m=1.)
-    sim.add(a=1., e=0.5)
-    sim.integrator = "pfvi"
-    sim.dt = 1e-3
+    sim.add(m=1e-3, a=1., e=0.5)
+    sim.integrator = "pfvi"          # adaptive: no sim.dt needed
     sim.integrate(10.)
+    print(sim.integrator.n_steps)
 
-Options are integrator fields (``sim.integrator.fitting``, ``.frequency``,
-``.omega``, ``.stages``, ``.u_max``), documented in ``sim.integrator.__doc__``
-and saved in Simulationarchives; import rebound_pfvi before loading an archive
-that uses it. The method: Kosmas & Vlachos, "Phase-fitted Discrete Lagrangian
-Integrators"; docs/method.md.
+Options and statistics are integrator fields, saved in Simulationarchives
+(import rebound_pfvi before loading an archive that uses it). The list below
+is generated from the C core's own field list when the package is imported.
 """
 import ctypes as _ctypes
 from typing import Any, Dict, Tuple
@@ -24,7 +26,7 @@ from typing import Any, Dict, Tuple
 from ._core import INTEGRATOR_NAME, lib as _lib
 
 __version__ = "0.1.0"
-__all__ = ["INTEGRATOR_NAME", "FITTINGS", "FREQUENCIES", "CENTRES", "STEP_CONTROLS", "STAGES", "seed_coefficients",
+__all__ = ["INTEGRATOR_NAME", "DEFAULTS", "FITTINGS", "FREQUENCIES", "CENTRES", "STEP_CONTROLS", "STAGES", "seed_coefficients",
            "gamma", "two_point_coefficients", "lobatto", "stage_coefficients", "stage_differentiation"]
 
 def _option_values(field):
@@ -53,6 +55,48 @@ def _stages():
 STAGES = _stages()
 
 
+def _fields():
+    """(options, statistics) of the integrator, each {name: (default, documentation)},
+    as the C core documents and sets them for a new simulation."""
+    import rebound
+
+    sim = rebound.Simulation()
+    sim.integrator = INTEGRATOR_NAME
+    options, statistics = {}, {}
+    for fd in sim.integrator.callbacks.field_descriptor_list:
+        if fd.documentation:
+            name, doc = fd.name.decode(), fd.documentation.decode()
+            kind = statistics if doc.startswith("Statistic:") else options
+            value = getattr(sim.integrator, name)
+            # Plain Python values (REBOUND returns its own str subclass for enums).
+            value = str(value) if isinstance(value, str) else int(value) if isinstance(value, int) else float(value)
+            kind[name] = (value, doc)
+    return options, statistics
+
+
+_OPTIONS, _STATISTICS = _fields()
+#: pfvi's options as a new simulation has them, from the C core (the one
+#: source: the comparisons, the stability cases and the examples read them here).
+DEFAULTS: Dict[str, Any] = {name: value for name, (value, _) in _OPTIONS.items()}
+
+
+def _first_sentence(text: str) -> str:
+    head = text.split(". ")[0].rstrip(".")
+    return head if len(head) <= 160 else head[:157] + "..."
+
+
+def _fields_doc() -> str:
+    """The module docstring's part generated from the core's field list."""
+    lines = ["", "Options (``sim.integrator.<name>``; default, and what it is: "
+             "``help(sim.integrator)`` has each in full)::", ""]
+    for name, (value, doc) in _OPTIONS.items():
+        lines.append(f"    {name} = {value!r}: {_first_sentence(doc)}")
+    lines += ["", "Statistics (counted since the integrator was set)::", ""]
+    for name, (_, doc) in _STATISTICS.items():
+        lines.append(f"    {name}: {_first_sentence(doc[len('Statistic:'):].strip())}")
+    return "\n".join(lines) + "\n"
+
+
 def _show_options_and_statistics():
     """repr(sim.integrator) for "pfvi": its documented fields (options, then
     statistics), not the scratch saved for archives (compensation, the
@@ -79,6 +123,7 @@ def _show_options_and_statistics():
 
 
 _show_options_and_statistics()
+__doc__ = (__doc__ or "") + _fields_doc()
 
 
 def _refuse_integers_that_wrap():

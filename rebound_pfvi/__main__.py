@@ -170,7 +170,8 @@ def build_parser() -> argparse.ArgumentParser:
                          help="folder for the results (default: %(default)s, in the current folder)")
 
     stability = commands.add_parser(
-        "stability", help="stiff and extreme cases: pfvi (every fitting, s = 2 and 4) beside IAS15 and WHFast",
+        "stability", help="stiff and extreme cases: pfvi (its defaults, then the seed's fittings and 'none' at "
+                     "s = 2 and 4) beside IAS15 and WHFast",
         description="Runs each extreme case (e up to 0.9999, flybys, radial infall, Burrau's problem, a "
                     "close encounter, mass ratios, fixed steps beyond u_max, 1e5 periods, a stiff triple) "
                     "with every integrator, each in its own process with a wall-time budget, and writes "

@@ -35,8 +35,8 @@ import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
-from . import runner, runs, verdict
-from .integrators import FAMILIES, SEED_MODEL
+from . import DEFAULTS, runner, runs, verdict
+from .integrators import FAMILIES, pfvi_label, pfvi_options
 from .integrators import configure as configure_integrator
 from .runs import ProgressCallback, Run
 
@@ -45,6 +45,8 @@ if TYPE_CHECKING:
 
     from .scenes import Scene
 
+#: Each family's name on the pages.
+FAMILY_NAMES = {"pfvi": "pfvi", "ias15": "IAS15", "whfast": "WHFast", "leapfrog": "LEAPFROG", "bs": "BS"}
 #: The accuracy knob of each family, as the table and plot call it.
 KNOBS = {"pfvi": "epsilon", "ias15": "epsilon", "bs": "eps", "whfast": "steps/period",
          "leapfrog": "steps/period"}
@@ -56,7 +58,10 @@ class Setting:
 
     family: str
     value: float
-    options: Tuple[Tuple[str, Any], ...] = ()  # (name, value) pairs, e.g. (("stages", 4), ("fitting", "phase"))
+    #: (name, value) pairs, e.g. (("stages", 6),); an option not named is the
+    #: integrator's default (pfvi's: :data:`rebound_pfvi.DEFAULTS`; the seed's
+    #: fittings "phase" and "phase-literal" bring the seed's frequency and centre).
+    options: Tuple[Tuple[str, Any], ...] = ()
     line: str = field(default="", compare=False)  # plot line and table group
 
     def __post_init__(self) -> None:
@@ -65,15 +70,12 @@ class Setting:
         if not (isinstance(self.value, (int, float)) and self.value > 0 and math.isfinite(self.value)):
             raise ValueError(f"{KNOBS[self.family]}={self.value!r} for {self.family} must be a positive number")
         if not self.line:
-            label = self.family if self.family != "ias15" else "IAS15"
-            label = {"whfast": "WHFast", "leapfrog": "LEAPFROG", "bs": "BS"}.get(label, label)
-            opts = dict(self.options)
             if self.family == "pfvi":
-                label += f" s={opts.get('stages', 4)} {opts.get('fitting', 'phase')}"
-                if opts.get("frequency", "curvature") != "curvature":
-                    label += f" ({opts['frequency']} omega)"
-                if opts.get("step_control", "reversible") != "reversible":
-                    label += f" {opts['step_control']}"
+                label = pfvi_label(dict(self.options))
+            else:
+                label = FAMILY_NAMES[self.family]
+                if self.options:
+                    label += " " + " ".join(f"{k}={v}" for k, v in self.options)
             object.__setattr__(self, "line", label)
 
     @property
@@ -86,16 +88,22 @@ PFVI_EPSILONS = {"quick": (1e-4, 1e-6, 1e-8, 1e-10), "full": tuple(10.0 ** -k fo
 #: The symmetric control's epsilon (the error per orbit) reaches further down:
 #: to 1e-14, where s = 8 reaches 1e-10 AU on the comet (docs/results.md).
 PFVI_SYMMETRIC_EPSILONS = {"quick": (1e-4, 1e-6, 1e-8, 1e-10, 1e-12, 1e-14), "full": tuple(10.0 ** -k for k in range(4, 15))}
-#: pfvi's lines: (stages, fitting, step_control). The default (symmetric
-#: steps, no fitting, s = 8) beside s = 6 (and s = 4 and "exact" in the full
-#: sweep), and the seed's fitting under the osculating-circle control, the
-#: default before it, for comparison. (s = 2 is left out: second order, it
-#: needs 1e6 steps per orbit for 1e-9.)
-PFVI_LINES = {"quick": ((6, "none", "symmetric"), (8, "none", "symmetric"), (4, "phase", "reversible")),
-              "full": ((4, "none", "symmetric"), (6, "none", "symmetric"), (8, "none", "symmetric"),
-                       (4, "exact", "symmetric"), (4, "phase", "reversible"), (4, "none", "reversible"))}
-#: With a given frequency (the oscillator's): the seed's fitting, s = 2 and 4.
-PFVI_FIXED_LINES = ((2, "phase", "reversible"), (4, "phase", "reversible"))
+#: pfvi's lines, each the options it changes from pfvi's defaults: the
+#: defaults first (s = 8, no fitting, symmetric steps), beside s = 6 (and s =
+#: 4 and "exact" in the full sweep), and the seed's scheme (its fitting,
+#: frequency and centre at s = 4) under the osculating-circle control, the
+#: default before the symmetric one, for comparison. (s = 2 is left out:
+#: second order, it needs 1e6 steps per orbit for 1e-9.)
+_SEED_LINE = (("stages", 4), ("fitting", "phase"), ("step_control", "reversible"))
+PFVI_LINES: Dict[str, Tuple[Tuple[Tuple[str, Any], ...], ...]] = {
+    "quick": ((), (("stages", 6),), _SEED_LINE),
+    "full": ((), (("stages", 6),), (("stages", 4),), (("stages", 4), ("fitting", "exact")), _SEED_LINE,
+             (("stages", 4), ("step_control", "reversible")))}
+#: With a given frequency (the oscillator's): the seed's scheme at s = 2 and
+#: 4, and s = 4 "exact" (exact on the oscillator at its frequency).
+PFVI_FIXED_LINES = ((("stages", 2), ("fitting", "phase"), ("step_control", "reversible")),
+                    (("stages", 4), ("fitting", "phase"), ("step_control", "reversible")),
+                    (("stages", 4), ("fitting", "exact")))
 IAS15_EPSILONS = {"quick": (1e-3, 1e-5, 1e-7, 1e-9), "full": tuple(10.0 ** -k for k in range(2, 10))}
 BS_EPS = {"quick": (1e-4, 1e-7, 1e-10, 1e-13), "full": tuple(10.0 ** -k for k in range(4, 14))}
 FIXED_STEPS = {"quick": (100, 1000, 10000), "full": (30, 100, 300, 1000, 3000, 10000, 30000)}
@@ -118,15 +126,12 @@ def default_settings(scene: Scene, size: str = "quick",
             continue
         if family == "pfvi":
             for frequency in scene.pfvi_frequencies:
-                lines = PFVI_LINES[size] if frequency == "curvature" else PFVI_FIXED_LINES
-                for stages, fitting, control in lines:
+                lines = PFVI_LINES[size] if frequency is None else PFVI_FIXED_LINES
+                for line in lines:
+                    options = line + ((("frequency", frequency),) if frequency is not None else ())
+                    control = pfvi_options(dict(options)).get("step_control", DEFAULTS["step_control"])
                     epsilons = PFVI_SYMMETRIC_EPSILONS if control == "symmetric" else PFVI_EPSILONS
                     for epsilon in epsilons[size]:
-                        options: Tuple[Tuple[str, Any], ...] = (("stages", stages), ("fitting", fitting))
-                        if frequency != "curvature":
-                            options += (("frequency", frequency),)
-                        if control != "reversible":
-                            options += (("step_control", control),)
                         settings.append(Setting("pfvi", epsilon, options))
         elif family == "ias15":
             settings += [Setting("ias15", x) for x in IAS15_EPSILONS[size]]
@@ -139,17 +144,14 @@ def default_settings(scene: Scene, size: str = "quick",
 
 def configure(sim: rebound.Simulation, scene: Scene, setting: Setting) -> None:
     """Sets the integrator of `sim` as `setting` asks."""
-    opts = dict(setting.options)
     if setting.family == "pfvi":
-        # dt: the cap on adaptive steps; the controller starts from it.
-        # The seed's fittings with the seed's frequency and centre (unless the
-        # setting names them); "none" and "exact" with pfvi's defaults.
-        fitting = opts.get("fitting", "phase")
-        seed = fitting in ("phase", "phase-literal")
-        configure_integrator(sim, "pfvi", dt=scene.period / 10.0, stages=int(opts.get("stages", 4)),
-                             fitting=fitting, step_control=opts.get("step_control", "reversible"),
-                             epsilon=setting.value, **({"centre": SEED_MODEL["centre"]} if seed else {}))
-        frequency = opts.get("frequency", SEED_MODEL["frequency"] if seed else None)
+        # dt: the cap on the first step (adaptive steps need none). Options
+        # not named stay pfvi's defaults; the seed's fittings bring the
+        # seed's frequency and centre; the scene sets a frequency it knows
+        # (the oscillator's omega for "fixed").
+        opts = pfvi_options(dict(setting.options))
+        frequency = opts.pop("frequency", None)
+        configure_integrator(sim, "pfvi", dt=scene.period / 10.0, epsilon=setting.value, **opts)
         if frequency is not None:
             scene.configure_pfvi(sim, frequency)
     elif setting.family == "ias15":

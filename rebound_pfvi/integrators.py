@@ -14,7 +14,7 @@ when the next step starts).
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Mapping
 
 if TYPE_CHECKING:
     import rebound
@@ -26,6 +26,37 @@ FAMILIES = ("pfvi", "ias15", "whfast", "leapfrog", "bs")
 #: curvature frequency, the harmonic model about the coordinate origin);
 #: with fitting "phase" or "phase-literal" they reproduce its figures.
 SEED_MODEL: dict[str, Any] = {"frequency": "curvature", "centre": "origin"}
+#: The fittings that are the seed's scheme (with SEED_MODEL).
+SEED_FITTINGS = ("phase", "phase-literal")
+
+
+def pfvi_options(options: Mapping[str, Any]) -> dict[str, Any]:
+    """The options a pfvi run sets: those named, and for the seed's fittings
+    the seed's frequency and centre unless named; everything else stays
+    pfvi's default (:data:`rebound_pfvi.DEFAULTS`)."""
+    opts = dict(options)
+    if opts.get("fitting") in SEED_FITTINGS:
+        opts = {**SEED_MODEL, **opts}
+    return opts
+
+
+def pfvi_label(options: Mapping[str, Any]) -> str:
+    """A pfvi line's name from its options: "pfvi s=8" at the defaults, the
+    options that differ from them after s ("pfvi s=4 exact", "pfvi s=6
+    reversible"), and "pfvi seed s=4 phase reversible" for the seed's scheme
+    (its fittings, with its frequency and centre)."""
+    from . import DEFAULTS
+
+    opts = pfvi_options(options)
+    seed = opts.get("fitting") in SEED_FITTINGS
+    label = "pfvi seed" if seed else "pfvi"
+    label += f" s={opts.get('stages', DEFAULTS['stages'])}"
+    model = SEED_MODEL if seed else {}
+    for name in ("fitting", "step_control", "frequency", "centre", "u_max", "omega"):
+        if name in opts and opts[name] != model.get(name, DEFAULTS[name]):
+            value = opts[name]
+            label += f" {value}" if name in ("fitting", "step_control") else f" {name}={value}"
+    return label
 
 
 def _fields(sim: rebound.Simulation) -> set:

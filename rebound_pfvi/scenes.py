@@ -107,8 +107,10 @@ class Scene:
     name = "scene"
     periods: float  # every subclass sets it: the run's length in its periods
     families: Tuple[str, ...] = GRAVITY_FAMILIES
-    #: pfvi frequency options worth sweeping in this scene.
-    pfvi_frequencies: Tuple[str, ...] = ("curvature",)
+    #: pfvi's lines for this scene: None for the lines of every scene
+    #: (compare.PFVI_LINES), a frequency for the lines run with it
+    #: (compare.PFVI_FIXED_LINES; the oscillator's known "fixed" omega).
+    pfvi_frequencies: Tuple[Optional[str], ...] = (None,)
     #: True if build(counter=...) counts its own force evaluations.
     counts_own_forces = False
 
@@ -352,7 +354,7 @@ class Oscillator(Scene):
 
     name = "oscillator"
     families = ("pfvi", "ias15", "leapfrog", "bs")
-    pfvi_frequencies = ("curvature", "fixed")
+    pfvi_frequencies = (None, "fixed")
     counts_own_forces = True
 
     def __init__(self, omega: Any = 2.0 * math.pi, amplitude: Any = 1.0, periods: Any = 100.0) -> None:

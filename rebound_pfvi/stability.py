@@ -1,9 +1,9 @@
 """Stiff and extreme cases: does each integrator finish, how wrong is it, and what happened?
 
-``rebound-pfvi stability`` runs every case of :data:`CASES` with pfvi (every
-fitting of the seed, with its frequency and centre (``SEED_MODEL``), and
-"none"; s = 2 and 4, adaptive steps unless the case prescribes fixed ones)
-beside IAS15 and WHFast. Every run is a separate process with a wall-time
+``rebound-pfvi stability`` runs every case of :data:`CASES` with pfvi (its
+defaults first; then every fitting of the seed, with its frequency and centre
+(``SEED_MODEL``), and "none", at s = 2 and 4; adaptive steps unless the case
+prescribes fixed ones) beside IAS15 and WHFast. Every run is a separate process with a wall-time
 budget (:mod:`rebound_pfvi.runner`, ``fresh=True``), so that a run which
 crashes, hangs or crawls becomes a row of the report ("crashed", "killed",
 "stopped by the budget") instead of taking the report down with it. Every row
@@ -30,7 +30,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from . import runner, runs, scenes, verdict
-from .integrators import SEED_MODEL, configure as configure_integrator
+from . import DEFAULTS
+from .integrators import configure as configure_integrator, pfvi_label, pfvi_options
 from .runs import ProgressCallback, Run
 
 if TYPE_CHECKING:
@@ -350,36 +351,28 @@ def cases() -> Dict[str, Case]:
 @dataclass(frozen=True)
 class Config:
     family: str  # pfvi, ias15, whfast
-    fitting: Optional[str] = None
-    stages: Optional[int] = None
+    #: pfvi's options beyond its defaults, (name, value) pairs (as compare.Setting's).
+    options: Tuple[Tuple[str, Any], ...] = ()
     epsilon: Optional[float] = None
-    step_control: Optional[str] = None  # pfvi's default if None
 
     @property
     def label(self) -> str:
         if self.family == "pfvi":
-            control = f" {self.step_control}" if self.step_control else ""
-            return f"pfvi {self.fitting} s={self.stages}{control}"
+            return pfvi_label(dict(self.options))
         return self.family.upper() if self.family != "whfast" else "WHFast"
-
-
-def default_stages() -> int:
-    """pfvi's default number of stages, as the C core sets it: its row is added to every report."""
-    sim = scenes.new_simulation()
-    sim.integrator = "pfvi"
-    return int(sim.integrator.stages)
 
 
 def default_configs(integrators: Sequence[str] = ("pfvi", "ias15", "whfast"), fittings: Sequence[str] = FITTINGS,
                     stages: Sequence[int] = STAGES, epsilon: float = 1e-6,
                     ias15_epsilon: float = 1e-9) -> List[Config]:
+    """pfvi at its defaults first (but epsilon), then each fitting at each
+    of `stages` (the seed's with its frequency and centre); IAS15; WHFast."""
     configs = []
     for family in integrators:
         if family == "pfvi":
-            configs += [Config("pfvi", f, s, epsilon) for s in stages for f in fittings]
-            default = default_stages()
-            if default not in stages and "none" in fittings:
-                configs.append(Config("pfvi", "none", default, epsilon))  # pfvi's defaults
+            configs.append(Config("pfvi", (), epsilon))
+            configs += [Config("pfvi", (("stages", s),) + ((("fitting", f),) if f != DEFAULTS["fitting"] else ()),
+                               epsilon) for s in stages for f in fittings]
         elif family == "ias15":
             configs.append(Config("ias15", epsilon=ias15_epsilon))
         elif family == "whfast":
@@ -394,8 +387,7 @@ def configure(sim: rebound.Simulation, case: Case, config: Config) -> None:
         fixed = case.fixed_dt is not None
         # dt: the fixed step, or the cap on adaptive steps
         configure_integrator(sim, "pfvi", dt=case.fixed_dt if fixed else case.time_scale / 10.0,
-                             fitting=config.fitting, stages=config.stages, epsilon=0.0 if fixed else config.epsilon,
-                             **SEED_MODEL, **({"step_control": config.step_control} if config.step_control else {}))
+                             epsilon=0.0 if fixed else config.epsilon, **pfvi_options(dict(config.options)))
     elif config.family == "ias15":
         configure_integrator(sim, "ias15", dt=case.fixed_dt if case.fixed_dt is not None else case.time_scale / 100.0,
                              epsilon=config.epsilon)
@@ -428,8 +420,15 @@ def _positions(sim):
 def _identity(case_name: str, config: Config, budget: float) -> Run:
     """A run of `config` on a case before it has run (no finite state yet)."""
     return Run(runs.STABILITY, case_name, config.family, config.label, budget_s=budget, finite=False,
-               options={"fitting": config.fitting, "stages": config.stages, "epsilon": config.epsilon,
-                        **({"step_control": config.step_control} if config.step_control else {})})
+               options=_row_options(config))
+
+
+def _row_options(config: Config) -> Dict[str, Any]:
+    """What a report row records of a run's options: pfvi's fitting and s as run."""
+    if config.family != "pfvi":
+        return {"fitting": None, "stages": None, "epsilon": config.epsilon}
+    opts = {**DEFAULTS, **dict(config.options)}
+    return {"fitting": opts["fitting"], "stages": opts["stages"], "epsilon": config.epsilon}
 
 
 def run(case_name: str, config: Config, budget: float) -> Run:

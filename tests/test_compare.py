@@ -124,7 +124,7 @@ def test_quick_cli_run_writes_table_data_and_png_with_every_integrator(tmp_path,
     families = {r["family"] for r in data["rows"] if r["status"] == "ok"}
     assert families == set(compare.FAMILIES)
     table = (out / "kepler-e0.9.md").read_text()
-    for label in ("pfvi s=6 none symmetric", "pfvi s=8 none symmetric", "pfvi s=4 phase", "IAS15", "WHFast", "LEAPFROG", "BS"):
+    for label in ("pfvi s=6", "pfvi s=8", "pfvi seed s=4 phase reversible", "IAS15", "WHFast", "LEAPFROG", "BS"):
         assert f"| {label} |" in table
     png = (out / "kepler-e0.9.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20000

@@ -1,4 +1,4 @@
-"""The main job: the demo runs and reports what it claims."""
+"""The demo (bare `rebound-pfvi`): it runs and reports what it claims."""
 import pytest
 
 from rebound_pfvi.__main__ import main
@@ -8,12 +8,16 @@ from rebound_pfvi.demo import run_demo
 def test_demo_rows_and_errors():
     lines = []
     rows = run_demo(orbits=2, write=lines.append)
-    assert len(rows) == 8 and len(lines) == 11
+    assert len(rows) == 8 and len(lines) == 12
     by = {(r["e"], r["integrator"]): r for r in rows}
-    # Circular orbit: the fitted scheme is exact to round-off, the classical one is not.
-    assert by[(0.0, "pfvi:phase")]["energy_error"] < 1e-13
-    assert by[(0.0, "pfvi:phase")]["position_error"] < 1e-11
-    assert by[(0.0, "pfvi:none")]["position_error"] > 1e-3
+    # The defaults first, named as such.
+    assert rows[0]["integrator"] == "pfvi (defaults)" and "pfvi (defaults)" in lines[3]
+    # Within their promise: epsilon (1e-6) per orbit of a = 1, 2 orbits.
+    for e in (0.0, 0.95):
+        assert by[(e, "pfvi (defaults)")]["position_error"] < 2e-6
+    # Circular orbit: the seed's fitted two-point scheme is exact to round-off.
+    assert by[(0.0, "pfvi seed s=2 phase, fixed dt")]["energy_error"] < 1e-13
+    assert by[(0.0, "pfvi seed s=2 phase, fixed dt")]["position_error"] < 1e-11
     # The reference (REBOUND's elements, M advanced by n t) agrees with IAS15.
     assert by[(0.95, "ias15")]["position_error"] < 1e-9
 

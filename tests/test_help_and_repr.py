@@ -90,3 +90,32 @@ def test_an_archive_needs_the_import_as_the_readme_says(tmp_path):
     with_import = subprocess.run([sys.executable, "-P", "-c", load.format("\nimport rebound_pfvi", str(path))],
                                  capture_output=True, text=True, check=True)
     assert with_import.stdout.split() == ["pfvi", "0.5"]
+
+
+def test_module_help_lists_every_field_with_the_cores_default():
+    # help(rebound_pfvi) is generated from the core's field list at import:
+    # a field added to the core is in it, with the default a new simulation has.
+    doc = rebound_pfvi.__doc__
+    sim = pfvi()
+    for name in documented_fields(sim):
+        assert re.search(rf"^    {name}\b", doc, re.M), name
+    for name, value in rebound_pfvi.DEFAULTS.items():
+        assert f"    {name} = {value!r}:" in doc
+        assert getattr(sim.integrator, name) == value
+    assert "sim.dt =" not in doc.split("Options")[0].split("::")[1]  # the example needs no dt
+
+
+def test_a_compare_setting_runs_pfvi_at_the_cores_defaults_but_what_it_names():
+    from rebound_pfvi import compare, scenes
+
+    scene = scenes.Kepler(e=0.5, periods=1)
+    for options, label in (((), "pfvi s=8"), ((("stages", 6),), "pfvi s=6"),
+                           ((("stages", 4), ("fitting", "phase")), "pfvi seed s=4 phase")):
+        setting = compare.Setting("pfvi", 1e-8, options)
+        assert setting.line == label
+        sim = scene.build()
+        compare.configure(sim, scene, setting)
+        expected = {**rebound_pfvi.DEFAULTS, "epsilon": 1e-8, **dict(options)}
+        if dict(options).get("fitting") == "phase":
+            expected.update(frequency="curvature", centre="origin")  # the seed's scheme
+        assert {name: getattr(sim.integrator, name) for name in expected} == expected

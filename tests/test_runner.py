@@ -24,7 +24,9 @@ class HangingPfvi(scenes.Kepler):
         time.sleep(600.0)
 
 
-SETTINGS = [compare.Setting("ias15", 1e-9), compare.Setting("pfvi", 1e-6), compare.Setting("whfast", 100)]
+# The seed's pfvi line: the scene sets its frequency (configure_pfvi), where these scenes fail.
+SETTINGS = [compare.Setting("ias15", 1e-9), compare.Setting("pfvi", 1e-6, (("fitting", "phase"),)),
+            compare.Setting("whfast", 100)]
 
 
 def test_a_run_that_crashes_its_worker_is_recorded_as_crashed(tmp_path, monkeypatch):
@@ -35,9 +37,9 @@ def test_a_run_that_crashes_its_worker_is_recorded_as_crashed(tmp_path, monkeypa
     assert not results.interrupted and results.finished == 3 and len(seen) == 3
     ias15, pfvi, whfast = results.rows
     assert pfvi.verdict == verdict.CRASHED and pfvi.status.startswith("crashed: process exit code ")
-    assert pfvi.label == "pfvi s=4 phase" and pfvi.wall_s is None
+    assert pfvi.label == "pfvi seed s=8 phase" and pfvi.wall_s is None
     assert ias15.verdict == whfast.verdict == verdict.ACCURATE  # the workers after the crash went on
-    assert results.verdict_counts()["pfvi s=4 phase"][verdict.CRASHED] == 1
+    assert results.verdict_counts()["pfvi seed s=8 phase"][verdict.CRASHED] == 1
 
 
 def test_a_run_its_budget_cannot_stop_is_killed_and_over_budget(monkeypatch):

@@ -31,9 +31,9 @@ def test_committed_rows_read_back_with_their_keys(path):
 
 def _identity(kind):
     if kind == COMPARE:
-        return Run(COMPARE, "kepler", "pfvi", "pfvi s=4 phase", knob="epsilon", value=1e-8,
+        return Run(COMPARE, "kepler", "pfvi", "pfvi seed s=4 phase reversible", knob="epsilon", value=1e-8,
                    options={"stages": 4, "fitting": "phase"})
-    return Run(STABILITY, "kepler-e0.99", "pfvi", "pfvi phase s=4", budget_s=60.0, finite=False,
+    return Run(STABILITY, "kepler-e0.99", "pfvi", "pfvi seed s=4 phase", budget_s=60.0, finite=False,
                options={"fitting": "phase", "stages": 4, "epsilon": 1e-6})
 
 
@@ -60,10 +60,10 @@ def test_a_returned_run_is_the_run_itself():
 
 def test_names_and_counts():
     compare_run, stability_run = _identity(COMPARE), _identity(STABILITY)
-    assert compare_run.name == "pfvi s=4 phase epsilon=1e-08"
-    assert stability_run.name == "kepler-e0.99: pfvi phase s=4"
+    assert compare_run.name == "pfvi seed s=4 phase reversible epsilon=1e-08"
+    assert stability_run.name == "kepler-e0.99: pfvi seed s=4 phase"
     compare_run.verdict = verdict.INACCURATE
     stability_run.verdict = verdict.REFUSED
     assert compare_run.finished and not stability_run.finished
     counts = runs.count([compare_run, stability_run, compare_run])
-    assert counts["pfvi s=4 phase"][verdict.INACCURATE] == 2 and counts["pfvi phase s=4"][verdict.REFUSED] == 1
+    assert counts["pfvi seed s=4 phase reversible"][verdict.INACCURATE] == 2 and counts["pfvi seed s=4 phase"][verdict.REFUSED] == 1

@@ -50,7 +50,7 @@ def test_flyby_duration_takes_the_body_to_the_mirror_point(name):
 
 
 def test_a_run_over_its_budget_is_stopped_and_reported():
-    config = stability.Config("pfvi", "phase", 4, 1e-6)
+    config = stability.Config("pfvi", (("stages", 4), ("fitting", "phase")), 1e-6)
     row = stability.run("long-e0.99", config, budget=0.2)
     assert row["status"] == "stopped by the budget of 0.2 s"
     assert 0 < row["fraction"] < 0.01 and row["finite"]
@@ -61,7 +61,7 @@ def test_a_run_whose_steps_collapse_is_stopped_inside_integrate():
     # s = 2 "phase" breaks the stiff binary (the centre-of-mass instability)
     # and its steps collapse to ~1e-12 yr: one checkpoint is never reached.
     # The budget must still stop it, from the timer thread.
-    config = stability.Config("pfvi", "phase", 2, 1e-6)
+    config = stability.Config("pfvi", (("stages", 2), ("fitting", "phase")), 1e-6)
     row = stability.run("stiff-binary", config, budget=3.0)
     assert row["status"] == "stopped by the budget of 3 s"
     assert row["wall_s"] < 10.0
@@ -70,7 +70,7 @@ def test_a_run_whose_steps_collapse_is_stopped_inside_integrate():
 
 def test_fixed_step_cases_give_pfvi_fixed_steps():
     case = stability.cases()["fixed-u-at"]
-    config = stability.Config("pfvi", "phase", 2, 1e-6)
+    config = stability.Config("pfvi", (("stages", 2), ("fitting", "phase")), 1e-6)
     sim = case.build()
     stability.configure(sim, case, config)
     assert sim.integrator.epsilon == 0.0 and sim.dt == case.fixed_dt
@@ -100,16 +100,17 @@ def test_cli_writes_the_report(tmp_path):
     assert done.returncode == 0, done.stderr
     data = json.loads((tmp_path / "out" / "stability.json").read_text())
     rows = {(r["case"], r["integrator"]): r for r in data["rows"]}
-    assert len(rows) == 2 * 8  # 6 seed-fitting rows, the default (s = 6 "none"), IAS15
+    assert len(rows) == 2 * 8  # the defaults, 6 rows at s = 2 and 4, IAS15
     assert all(r["status"] == "finished" for r in rows.values())
     # Measured with the default (symmetric) step control: IAS15 7.8e-15 AU;
     # pfvi s = 4 9.9e-15 AU, s = 2 1.6e-12 AU (its density follows the fall;
     # the osculating-circle control held the steps at the cap on a radial
     # path: 2.2e-7 and 2.4e-4 AU, and s = 2 ended with an energy error of 7.8).
     assert rows["radial-infall", "IAS15"]["position_error"] < 1e-12
-    assert rows["radial-infall", "pfvi phase s=4"]["position_error"] < 1e-12
-    assert rows["radial-infall", "pfvi phase s=2"]["position_error"] < 1e-10
-    assert {rows["radial-infall", f"pfvi {f} s=2"]["verdict"] for f in stability.FITTINGS} == {"accurate"}
+    assert rows["radial-infall", "pfvi seed s=4 phase"]["position_error"] < 1e-12
+    assert rows["radial-infall", "pfvi seed s=2 phase"]["position_error"] < 1e-10
+    assert {rows["radial-infall", label]["verdict"] for label in ("pfvi seed s=2 phase", "pfvi seed s=2 phase-literal",
+                                                                "pfvi s=2")} == {"accurate"}
     assert rows["radial-infall", "IAS15"]["verdict"] == rows["flyby-e5", "IAS15"]["verdict"] == "accurate"
     text = (tmp_path / "out" / "stability.md").read_text()
     assert "## radial-infall" in text and "## flyby-e5" in text
@@ -146,7 +147,7 @@ def test_cli_progress_bar_and_failed_runs_in_full_at_the_end(tmp_path):
     refusals = [line for line in done.stdout.splitlines() if line.startswith("- fixed-u-40x: pfvi ")]
     assert len(refusals) == 4, done.stdout  # s = 4 with each fitting, and the default s = 8
     for line in refusals:  # the whole message, to its last word
-        assert (" s=4: refused: pfvi: the 4-stage solve did not converge" in line
+        assert (" s=4" in line and ": refused: pfvi: the 4-stage solve did not converge" in line
                 or " s=8: refused: pfvi: the 8-stage solve did not converge" in line), line
         assert line.endswith("step not taken, state restored. Lower dt."), line
 

@@ -45,7 +45,7 @@ def test_stability_statuses_map_to_verdicts():
     base = {"energy_error_max": 1e-7, "relative_position_error": 1e-6, "finite": True, "fraction": 0.25}
 
     def row(**fields):
-        return Run(STABILITY, "kepler-e0.99", "pfvi", "pfvi phase s=4", **{**base, **fields})
+        return Run(STABILITY, "kepler-e0.99", "pfvi", "pfvi seed s=4 phase", **{**base, **fields})
 
     assert stability.judge(case, row(status="finished"))[0] == verdict.ACCURATE
     assert stability.judge(case, row(status="finished", energy_error_max=4.2e5)) == (
@@ -73,7 +73,7 @@ def test_radial_infall_at_s2_is_inaccurate_and_ias15_accurate():
     name, budget = "radial-infall", 30.0
     case = stability.cases()[name]
     rows = {}
-    for config in (stability.Config("pfvi", "phase", 2, 1e-6, "reversible"), stability.Config("ias15", epsilon=1e-9)):
+    for config in (stability.Config("pfvi", (("stages", 2), ("fitting", "phase"), ("step_control", "reversible")), 1e-6), stability.Config("ias15", epsilon=1e-9)):
         row = stability.run(name, config, budget)
         row.relative_position_error = stability.relative_position_error(case, row, case.exact(row["t"]))
         row.verdict, row.verdict_detail = stability.judge(case, row)
@@ -107,7 +107,7 @@ def test_compare_rows_carry_verdicts():
     ("diverged (non-finite energy or position)", (verdict.INACCURATE, "diverged (non-finite energy or position)")),
 ])
 def test_compare_failures_map_to_verdicts(status, expected):
-    assert compare.judge(scenes.Kepler(), Run(COMPARE, "kepler", "pfvi", "pfvi s=4 phase", status=status)) == expected
+    assert compare.judge(scenes.Kepler(), Run(COMPARE, "kepler", "pfvi", "pfvi seed s=4 phase reversible", status=status)) == expected
 
 
 def test_compare_budget_stops_a_slow_run_as_over_budget(tmp_path):
@@ -124,7 +124,7 @@ def test_compare_budget_stops_a_slow_run_as_over_budget(tmp_path):
     fraction = float(stopped["verdict_detail"].split(" at ")[1].split()[0])
     assert 0.0 < fraction < 1.0
     assert fine["verdict"] == verdict.ACCURATE
-    assert results.verdict_counts()["pfvi s=2 none"][verdict.OVER_BUDGET] == 1
+    assert results.verdict_counts()["pfvi s=2"][verdict.OVER_BUDGET] == 1
     from rebound_pfvi import report
 
     report.write(results, str(tmp_path))
