@@ -307,7 +307,8 @@ def markdown(A, B, C, D, E, args, seconds: float) -> str:
     for r in D:
         out.append(f"| {r['s']} | {r['scheme']} | {r['first']:.2e} | {r['last']:.2e} | "
                    f"{r['last']/r['first'] if r['first'] > 0 else math.nan:.2f} | {r['seconds']:.1f} |")
-    out += ["", "## E. The default adaptive step control (reversible): what fitting changes there", "",
+    out += ["", "## E. The osculating-circle step control (\"reversible\", the default before the symmetric one): "
+            "what fitting changes there", "",
             "Final position error [AU] and wall time (best of 2) at the steps the osculating-circle estimate "
             "chose; time relative to \"none\" in brackets.", "",
             "| scene | epsilon | s | steps (none / phase / exact) | none | seed phase | exact radial |",

@@ -1,12 +1,12 @@
-"""Error against run time for an eccentric orbit: pfvi beside IAS15, WHFast, LEAPFROG and BS.
+"""Error against run time for an eccentric orbit: pfvi beside REBOUND's integrators.
 
 A starting point for your own comparisons. Run it with
 
     python3 examples/compare_eccentric.py
 
 It builds a Kepler scene with astropy units, sweeps every integrator's
-accuracy knob (pfvi's and IAS15's epsilon, BS's tolerance, WHFast's and
-LEAPFROG's steps per period), prints an astropy table and writes the
+accuracy knob (pfvi's and IAS15's epsilon, BS's tolerance, the steps per
+period of WHFast, LEAPFROG, TRACE and MERCURIUS), prints an astropy table and writes the
 markdown page, the JSON/CSV data and the work-precision PNG to
 ./compare-example/ (the same files as `rebound-pfvi compare`).
 """

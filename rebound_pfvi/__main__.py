@@ -10,6 +10,7 @@ import os
 import shlex
 import sys
 import threading
+import time
 from typing import TYPE_CHECKING, Any, Dict, List, Optional, Sequence, TextIO
 
 from . import scenes as scenes_module
@@ -141,7 +142,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--orbits", type=_positive_int, default=100, help="orbits to integrate (default 100)")
 
     compare = commands.add_parser(
-        "compare", help="error against run time: pfvi, IAS15, WHFast, LEAPFROG, BS on a scene",
+        "compare", help="error against run time: pfvi, IAS15, WHFast, LEAPFROG, BS, TRACE, MERCURIUS on a scene",
         description="Sweeps every integrator's accuracy knob on a scene and writes <scene>.md (who is fastest "
                     "at each accuracy and why, a verdict on every run, the tables), .json, .csv and .png "
                     "(work-precision diagram) to --output.")
@@ -211,18 +212,28 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 class Progress:
-    """A progress bar with the elapsed time and the time left (tqdm), on stderr.
+    """Progress on stderr: a bar with the elapsed time and the time left
+    (tqdm) on a terminal; elsewhere (a log file, a pipe, CI) one line per
+    finished run, or per tenth of the work when the steps are not runs.
 
     It shows what finished last and how many runs did not finish, never a
     run's message: the command lists those in full at the end. tqdm is
     imported here, when a long command starts, not with the package."""
 
     def __init__(self, total: int, unit: str = "run", stream: Optional[TextIO] = None) -> None:
+        self.stream = stream or sys.stderr
+        self.total, self.unit, self.done = int(total), unit, 0
+        self.not_finished = 0
+        self._last: Optional[str] = None  # a finished run not yet written (line mode)
+        self._start = time.perf_counter()
+        self.bar: Any = None
+        isatty = getattr(self.stream, "isatty", None)
+        if not (callable(isatty) and isatty()):
+            return  # line mode
         from tqdm import tqdm
 
-        self.bar = tqdm(total=total, unit=unit, file=stream or sys.stderr, dynamic_ncols=True, mininterval=0.5,
+        self.bar = tqdm(total=total, unit=unit, file=self.stream, dynamic_ncols=True, mininterval=0.5,
                         smoothing=0.1, bar_format="{l_bar}{bar}| {n_fmt}/{total_fmt} [{elapsed}<{remaining}{postfix}]")
-        self.not_finished = 0
         # Redraw every second, so that the elapsed time moves while a long run is under way.
         self._stop = threading.Event()
         self._ticker = threading.Thread(target=self._tick, daemon=True)
@@ -235,20 +246,41 @@ class Progress:
     def __call__(self, done: int, total: int, run: Optional["Run"] = None) -> None:
         """compare's, stability's and paper's callback: `done` of `total` finished, `run` the last one."""
         if run is not None:
-            self.finished_one(run.name, not run.finished)
-        self.bar.update(done - self.bar.n)
+            # The verdict, or the status's first word ("refused"): never the message.
+            self.finished_one(f"{run.name}: {run.verdict or run.status.split(':')[0]}", not run.finished)
+        self.advance(done - self.done)
         if done >= total:
             self.close()
 
     def finished_one(self, what: str, failed: bool) -> None:
         """Names the run that finished last; counts it if it did not finish."""
         self.not_finished += bool(failed)
+        if self.bar is None:
+            self._last = what
+            return
         postfix = f"last: {what}"
         if self.not_finished:
             postfix += f"; not finished: {self.not_finished} (listed at the end)"
         self.bar.set_postfix_str(postfix, refresh=False)
 
+    def advance(self, n: int = 1) -> None:
+        """`n` more of the total are done."""
+        before, self.done = self.done, self.done + n
+        if self.bar is not None:
+            self.bar.update(n)
+            return
+        tenth = max(1, self.total // 10)
+        if self._last is None and self.done < self.total and self.done // tenth == before // tenth:
+            return
+        line = f"[{self.done}/{self.total} {self.unit}s, {time.perf_counter() - self._start:.1f} s]"
+        if self._last is not None:
+            line += f" {self._last}"
+            self._last = None
+        print(line, file=self.stream, flush=True)
+
     def close(self) -> None:
+        if self.bar is None:
+            return
         self._stop.set()
         self._ticker.join()  # no redraw after the bar is closed
         self.bar.close()
@@ -259,6 +291,21 @@ def invocation(argv: List[str]) -> str:
     ``rebound-pfvi`` script or ``python3 -P -m rebound_pfvi``, and the arguments."""
     program = "rebound-pfvi" if os.path.basename(sys.argv[0]) == "rebound-pfvi" else "python3 -P -m rebound_pfvi"
     return " ".join([program] + [shlex.quote(a) for a in argv])
+
+
+def check_output(parser: argparse.ArgumentParser, folder: str, option: str = "--output") -> None:
+    """Creates `folder` and writes (then removes) a file in it, before any run
+    starts: a folder that cannot be written is an error now, not a traceback
+    after the sweep, when its results would be lost."""
+    import tempfile
+
+    try:
+        os.makedirs(folder, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as error:
+        parser.error(f"argument {option}: cannot write to the folder {folder!r}: "
+                     f"{error.strerror or error}")
 
 
 def _scene_from_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
@@ -279,6 +326,26 @@ def _scene_from_args(parser: argparse.ArgumentParser, args: argparse.Namespace) 
         parser.error(f"scene {args.scene}: {error}")
 
 
+#: Seconds to wait for a Dask scheduler before --scheduler is an error.
+CONNECT_TIMEOUT_S = 10.0
+
+
+def _connect(parser: argparse.ArgumentParser, address: str) -> Any:
+    """A ``distributed.Client`` on `address`, or a one-line error: the
+    [dask] extra missing, or no scheduler answering there."""
+    try:
+        from distributed import Client
+    except ImportError:
+        parser.error("argument --scheduler: sending runs to Dask needs the [dask] extra: "
+                     "pip install \"rebound_pfvi[dask]\" (from a clone: pip install \".[dask]\")")
+    try:
+        return Client(address, timeout=CONNECT_TIMEOUT_S)
+    except Exception as error:  # noqa: BLE001 - refused, timed out, or not a scheduler: all one answer here
+        reason = f"{type(error).__name__}: {str(error).splitlines()[0]}" if str(error) else type(error).__name__
+        parser.error(f"argument --scheduler: could not connect to a Dask scheduler at {address!r} "
+                     f"(waited up to {CONNECT_TIMEOUT_S:g} s): {reason}")
+
+
 def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv: List[str]) -> int:
     from . import compare, report
 
@@ -290,13 +357,19 @@ def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv:
     if not settings:
         parser.error(f"argument --integrators: none of {', '.join(args.integrators)} applies to scene "
                      f"{scene.name!r} (it takes: {', '.join(scene.families)})")
+    check_output(parser, args.output)
+    scheduler = args.scheduler
+    if scheduler is not None:
+        scheduler = _connect(parser, scheduler)
     print(f"{scene.describe()}: {len(settings)} runs, best of {args.repeats}", flush=True)
     bar = Progress(len(settings))
     try:
         results = compare.run(scene, settings, repeats=args.repeats, samples=args.samples, workers=args.workers,
-                              scheduler=args.scheduler, progress=bar, budget=args.budget)
+                              scheduler=scheduler, progress=bar, budget=args.budget)
     finally:
         bar.close()
+        if scheduler is not None:
+            scheduler.close()
     command = invocation(argv)
     paths = report.write(results, args.output, command=command)
     if results.interrupted:
@@ -324,6 +397,7 @@ def run_paper(args: argparse.Namespace, argv: List[str]) -> int:
     if args.stages is not None and args.stages not in STAGES:
         args.subparser.error(f"argument --stages: {args.stages} is not one of {', '.join(map(str, STAGES))}")
 
+    check_output(args.subparser, args.output)
     if args.figure == "fig1":
         stages, control = args.stages or 2, args.step_control or "seed"
         bar = Progress(len(seed_paper.ECCENTRICITIES) * len(seed_paper.EPSILONS), unit="tolerance")
@@ -331,7 +405,7 @@ def run_paper(args: argparse.Namespace, argv: List[str]) -> int:
         def progress(row):
             bar.finished_one(f"e = {row['e']}, epsilon = {row['epsilon']:.0e}: phase {row['phase_steps']} steps, "
                              f"none {row['none_steps']} steps", False)
-            bar.bar.update(1)
+            bar.advance(1)
 
         command = invocation(argv)
         try:
@@ -376,6 +450,7 @@ def run_stability(args: argparse.Namespace, argv: List[str]) -> int:
         for name, case in stability.cases().items():
             print(f"{name:20s} {case.title}")
         return 0
+    check_output(args.subparser, args.output)
     configs = stability.default_configs(args.integrators, epsilon=args.epsilon)
     names = args.cases or list(stability.cases())
     total = len(names) * len(configs)

@@ -5,7 +5,8 @@ configure their integrators here.
     configure(sim, "pfvi", dt=0.01, stages=4, fitting="phase", epsilon=1e-8)
     configure(sim, "ias15", epsilon=1e-9)
     configure(sim, "bs", eps=1e-10)          # BS's eps_abs and eps_rel
-    configure(sim, "whfast", dt=1e-3)
+    configure(sim, "whfast", dt=1e-3, corrector=11)
+    configure(sim, "trace", dt=1e-3)            # r_crit_hill, peri_crit_eta: REBOUND's
 
 Options are the integrator's own fields (``help(sim.integrator)``), set after
 ``sim.integrator = family``; ``dt`` is ``sim.dt``. An unknown family or option
@@ -19,8 +20,11 @@ from typing import TYPE_CHECKING, Any, Mapping
 if TYPE_CHECKING:
     import rebound
 
-#: The integrator families the comparisons know.
-FAMILIES = ("pfvi", "ias15", "whfast", "leapfrog", "bs")
+#: The integrator families the comparisons know. TRACE and MERCURIUS run at
+#: REBOUND's defaults for their switching (TRACE: r_crit_hill 3,
+#: peri_crit_eta 1, peri_mode "FULL_BS"; MERCURIUS: r_crit_hill 3) unless a
+#: setting names them; their knob, like WHFast's and LEAPFROG's, is the step.
+FAMILIES = ("pfvi", "ias15", "whfast", "leapfrog", "bs", "trace", "mercurius")
 
 #: pfvi's frequency and centre as the seed prints its scheme (K&V: the
 #: curvature frequency, the harmonic model about the coordinate origin);

@@ -87,8 +87,24 @@ def fastest(rows: Iterable[Run], target: float) -> Dict[str, Run]:
     return best
 
 
+#: Two wall times within this ratio are a tie. Measured: the slowest over the
+#: fastest best-of-3 time of one setting in three quick sweeps, one after
+#: another on the 2-core development machine, has its 90th percentile at
+#: 1.48 on the comet (the main job) and 1.57 on kepler e = 0.95
+#: (`python3 -P benchmarks/noise.py [--scene kepler]`; docs/results.md, "Ties").
+TIE_RATIO = 1.6
+
+
+def tied(a: Run, b: Run) -> bool:
+    """Whether b's wall time is within the run-to-run noise (TIE_RATIO) of a's."""
+    low, high = sorted((_number(a.wall_s), _number(b.wall_s)))
+    return high <= low * TIE_RATIO
+
+
 def summary_table(rows: List[Run], floor: float = 0.0, length: str = "AU") -> str:
-    """The fastest run of each line that reaches each position error, as a markdown table."""
+    """The fastest run of each line that reaches each position error, as a
+    markdown table; the fastest, and every line tied with it (within
+    TIE_RATIO), in bold."""
     lines_in_order = list(dict.fromkeys(r.label for r in rows))
     targets = [t for t in TARGETS if t > floor]
     head = "| position error <= | " + " | ".join(lines_in_order) + " |"
@@ -97,8 +113,8 @@ def summary_table(rows: List[Run], floor: float = 0.0, length: str = "AU") -> st
         best = fastest(rows, target)
         cells = [f"{_number(best[n].wall_s):.3g} s" if n in best else "-" for n in lines_in_order]
         if best:
-            winner = min(best, key=lambda n: _number(best[n].wall_s))
-            cells = [f"**{c}**" if n == winner else c for n, c in zip(lines_in_order, cells)]
+            winner = best[min(best, key=lambda n: _number(best[n].wall_s))]
+            cells = [f"**{c}**" if n in best and tied(winner, best[n]) else c for n, c in zip(lines_in_order, cells)]
         lines.append(f"| {target:.0e} {length} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
@@ -106,15 +122,21 @@ def summary_table(rows: List[Run], floor: float = 0.0, length: str = "AU") -> st
 #: How each family gets to its accuracy: the reason behind its cost per unit of accuracy.
 HOW = {
     "pfvi": "pfvi is implicit: each step solves its stage equations by iteration (several force evaluations per "
-            "stage), with adaptive steps from a time-symmetric step density (the default, one solve per "
-            "step; lines marked symmetric) or from osculating circles (the others); it is of order 2s - 2 (s = 2: 2, s = 4: 6, "
-            "s = 6: 10)",
+            "stage), with adaptive steps from a time-symmetric step density (the default: one solve per "
+            "step) or, on the lines marked reversible, from osculating circles (several trial steps per "
+            "step); it is of order 2s - 2 (s = 4: 6, s = 6: 10, s = 8: 14)",
     "ias15": "IAS15 is a 15th-order adaptive predictor-corrector: long steps, each of several force evaluations",
     "bs": "BS (Gragg-Bulirsch-Stoer) extrapolates to high order with adaptive steps",
     "whfast": "WHFast takes fixed steps of an exact Kepler drift and interaction kicks (second order); its "
               "error is that of the kicks, so it is cheap where the motion is nearly Keplerian and the step "
               "resolves the closest approach",
     "leapfrog": "LEAPFROG takes fixed second-order steps: an eccentric orbit's pericentre needs very many of them",
+    "trace": "TRACE (2024) takes WHFast-like fixed steps in democratic heliocentric coordinates and switches "
+             "reversibly to BS for close encounters (within r_crit_hill = 3 Hill radii) and for pericentre "
+             "passages that the step does not resolve (peri_crit_eta = 1); REBOUND's defaults",
+    "mercurius": "MERCURIUS takes WHFast-like fixed steps in democratic heliocentric coordinates and hands "
+                 "close encounters (within r_crit_hill = 3 Hill radii) to IAS15; REBOUND's defaults. A "
+                 "pericentre passage is not an encounter to it",
 }
 
 
@@ -145,8 +167,10 @@ def _per_evaluation(row: Run) -> float:
 
 
 def conclusions(results: Results, floor: float = 0.0, length: str = "AU") -> List[str]:
-    """One sentence per position error: who is fastest, by how much, and the measured reason
-    (force evaluations and wall time per evaluation against the best pfvi run)."""
+    """One sentence per position error: who is fastest (or which lines tie
+    within the run-to-run noise, TIE_RATIO), by how much, and the measured
+    reason (force evaluations and wall time per evaluation against the best
+    pfvi run). Every ratio is another run's wall time over the fastest's."""
     sentences = []
     for target in [t for t in TARGETS if t > floor]:
         best = fastest(results.rows, target)
@@ -156,25 +180,35 @@ def conclusions(results: Results, floor: float = 0.0, length: str = "AU") -> Lis
         order = sorted(best.values(), key=lambda r: _number(r.wall_s))
         win = order[0]
         win_s = _number(win.wall_s)
-        text = f"To {target:.0e} {length}: {win.label} ({_knob(win)}) is fastest, {win_s:.3g} s"
-        # The runner-up of another family; pfvi gets its own clause unless it wins.
-        other = next((r for r in order[1:] if r.family != win.family
+        ties = [r for r in order[1:] if tied(win, r)]
+        if ties:
+            names = ", ".join(f"{r.label} ({_knob(r)}) {_number(r.wall_s):.3g} s" for r in ties)
+            text = (f"To {target:.0e} {length}: a tie within the run-to-run noise (wall times within "
+                    f"{TIE_RATIO:g}x): {win.label} ({_knob(win)}) {win_s:.3g} s, {names}")
+        else:
+            text = f"To {target:.0e} {length}: {win.label} ({_knob(win)}) is fastest, {win_s:.3g} s"
+        # The runner-up of another family beyond the tie; pfvi gets its own clause unless it is among the first.
+        first = [win] + ties
+        other = next((r for r in order[len(first):] if r.family != win.family
                       and (win.family == "pfvi" or r.family != "pfvi")), None)
         if other:
-            text += f", {_times(_number(other.wall_s) / win_s)} faster than {other.label} ({_knob(other)})"
+            text += (f"; next, {other.label} ({_knob(other)}) takes {_times(_number(other.wall_s) / win_s)} "
+                     f"the wall time of {win.label}")
         pfvi = next((r for r in order if r.family == "pfvi"), None)
-        if win.family != "pfvi":
+        if all(r.family != "pfvi" for r in first):
             if pfvi is None:
                 text += "; no pfvi run of the sweep gets there"
             else:
                 pfvi_s = _number(pfvi.wall_s)
-                text += (f"; the fastest pfvi, {pfvi.label} ({_knob(pfvi)}), takes {pfvi_s:.3g} s "
-                         f"({_times(pfvi_s / win_s)}): {win.label} needs "
+                text += (f"; the fastest pfvi, {pfvi.label} ({_knob(pfvi)}), takes {pfvi_s:.3g} s, "
+                         f"{_times(pfvi_s / win_s)} the wall time of {win.label}: {win.label} needs "
                          f"{win.force_evaluations} force evaluations at {_per_evaluation(win):.2g} µs each, "
                          f"pfvi {pfvi.force_evaluations} at {_per_evaluation(pfvi):.2g} µs")
         elif other:
-            text += (f": pfvi needs {win.force_evaluations} force evaluations at {_per_evaluation(win):.2g} µs "
-                     f"each, {other.label} {other.force_evaluations} at {_per_evaluation(other):.2g} µs")
+            lead = pfvi if pfvi is not None else win
+            text += (f": {lead.label} needs {lead.force_evaluations} force evaluations at "
+                     f"{_per_evaluation(lead):.2g} µs each, {other.label} {other.force_evaluations} at "
+                     f"{_per_evaluation(other):.2g} µs")
         sentences.append(text + ".")
     return sentences
 
@@ -228,15 +262,22 @@ def plot(results: Results, path: str) -> None:
     rows = [r for r in results.rows if r.status == "ok"]
     lines_in_order = list(dict.fromkeys(r.label for r in rows))
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.8))
-    styles = {"pfvi": "-", "ias15": "--", "whfast": ":", "leapfrog": "-.", "bs": (0, (5, 1, 1, 1))}
+    styles = {"pfvi": "-", "ias15": "--", "whfast": ":", "leapfrog": "-.", "bs": (0, (5, 1, 1, 1)),
+              "trace": (0, (3, 1, 1, 1, 1, 1)), "mercurius": (0, (1, 2))}
     markers = "osD^v<>ph*"
     floor = 1e-17  # exact zeros (WHFast's energy on two bodies) are drawn at the floor
     for k, name in enumerate(lines_in_order):
         sel = sorted((r for r in rows if r.label == name), key=lambda r: _number(r.wall_s))
         family = sel[0].family
+        # Points joined in order of wall time, each labelled with its knob's value (the knob is in the legend).
         for ax, errors in zip(axes, ([r.position_error for r in sel], [r.energy_error_max for r in sel])):
-            ax.loglog([r.wall_s for r in sel], [max(_number(e), floor) for e in errors], linestyle=styles[family],
-                      marker=markers[k % len(markers)], label=name, mfc="none" if family != "pfvi" else None)
+            ys = [max(_number(e), floor) for e in errors]
+            (drawn,) = ax.loglog([r.wall_s for r in sel], ys, linestyle=styles.get(family, "-"),
+                                 marker=markers[k % len(markers)], label=f"{name} ({sel[0].knob})",
+                                 mfc="none" if family != "pfvi" else None)
+            for r, y in zip(sel, ys):
+                ax.annotate(f"{r.value:g}", (_number(r.wall_s), y), textcoords="offset points", xytext=(2, 2),
+                            fontsize=5, color=drawn.get_color(), alpha=0.8)
     axes[0].set_ylabel(f"position error at t_end [{length_unit(results)}]")
     axes[1].set_ylabel("largest relative energy error")
     for ax in axes:

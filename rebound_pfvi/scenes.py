@@ -34,7 +34,7 @@ Counter = Optional[List[int]]
 Vector = Tuple[float, float, float]
 
 #: Integrator families every gravitational scene can use.
-GRAVITY_FAMILIES = ("pfvi", "ias15", "whfast", "leapfrog", "bs")
+GRAVITY_FAMILIES = ("pfvi", "ias15", "whfast", "leapfrog", "bs", "trace", "mercurius")
 #: IAS15's epsilon for references computed by integration, and the looser
 #: epsilon whose difference from it is reported as the reference's uncertainty.
 REFERENCE_EPSILON = 1e-11
@@ -207,8 +207,8 @@ class Kepler(Scene):
         if not 0.0 <= self.e < 1.0:
             raise ValueError(f"e={e!r} is not a bound eccentricity; allowed: 0 <= e < 1")
         self.periods = _positive(_number(periods, "periods"), "periods")
-        self.a = _positive(units.to_scene(a, "length", "a"), "a")
-        self.mass = _positive(units.to_scene(mass, "mass", "mass"), "mass")
+        self.a = _positive(units.to_scene(a, "length", "a"), "a", a)
+        self.mass = _positive(units.to_scene(mass, "mass", "mass"), "mass", mass)
         self.m = units.to_scene(m, "mass", "m")
         if self.m < 0.0:
             raise ValueError(f"m={units.show(m)} is negative; the orbiter's mass must be >= 0")
@@ -268,7 +268,7 @@ class Comet(Scene):
         self.e = _number(e, "e")
         if not 0.0 <= self.e < 1.0:
             raise ValueError(f"e={e!r} is not a bound eccentricity; allowed: 0 <= e < 1")
-        self.a = _positive(units.to_scene(a, "length", "a"), "a")
+        self.a = _positive(units.to_scene(a, "length", "a"), "a", a)
         self.periods = _positive(_number(periods, "periods"), "periods")
 
     def build(self, counter: Counter = None) -> rebound.Simulation:
@@ -306,8 +306,8 @@ class Triple(Scene):
         self.e = _number(e, "e")
         if not 0.0 <= self.e < 1.0:
             raise ValueError(f"e={e!r} is not a bound eccentricity; allowed: 0 <= e < 1")
-        self.a_inner = _positive(units.to_scene(a_inner, "length", "a_inner"), "a_inner")
-        self.a_outer = _positive(units.to_scene(a_outer, "length", "a_outer"), "a_outer")
+        self.a_inner = _positive(units.to_scene(a_inner, "length", "a_inner"), "a_inner", a_inner)
+        self.a_outer = _positive(units.to_scene(a_outer, "length", "a_outer"), "a_outer", a_outer)
         if self.a_outer <= 3.0 * self.a_inner:
             raise ValueError(f"a_outer={a_outer} must exceed 3 a_inner for a hierarchical triple")
         self.periods = _positive(_number(periods, "periods"), "periods")
@@ -358,8 +358,8 @@ class Oscillator(Scene):
     counts_own_forces = True
 
     def __init__(self, omega: Any = 2.0 * math.pi, amplitude: Any = 1.0, periods: Any = 100.0) -> None:
-        self.omega = _positive(units.to_scene(omega, "frequency", "omega"), "omega")
-        self.amplitude = _positive(units.to_scene(amplitude, "length", "amplitude"), "amplitude")
+        self.omega = _positive(units.to_scene(omega, "frequency", "omega"), "omega", omega)
+        self.amplitude = _positive(units.to_scene(amplitude, "length", "amplitude"), "amplitude", amplitude)
         self.periods = _positive(_number(periods, "periods"), "periods")
 
     def build(self, counter: Counter = None) -> rebound.Simulation:
@@ -731,9 +731,11 @@ def make(name: str, **params: Any) -> Scene:
 _number = units.plain_number
 
 
-def _positive(number: float, name: str) -> float:
+def _positive(number: float, name: str, given: Any = None) -> float:
+    """number if it is > 0; else an error naming `name` with the value as given (a Quantity as the user wrote it)."""
     if not number > 0.0:
-        raise ValueError(f"{name}={number!r} must be positive")
+        shown = repr(number) if given is None else units.show(given)
+        raise ValueError(f"{name}={shown} must be positive")
     return number
 
 

@@ -16,6 +16,7 @@ integrator never need it.
 from __future__ import annotations
 
 import math
+import re
 from typing import Any, Optional
 
 #: The unit system of every scene, as REBOUND's ``sim.units`` names it.
@@ -59,17 +60,33 @@ def parse(text: str, kind: str, name: str) -> Any:
     try:
         value = u.Quantity(text)
     except (TypeError, ValueError) as error:
-        raise ValueError(f"{name}: cannot read {text!r} as a quantity ({error}); "
+        raise ValueError(f"{name}: cannot read {text!r} as a quantity ({_unit_error(error)}); "
                          f"write a number and a unit, e.g. \"1 {ALLOWED[kind][0]}\" "
                          f"(units: {', '.join(ALLOWED[kind])})") from None
     if value.unit == u.dimensionless_unscaled:
         raise ValueError(f"{name}: {text!r} has no unit; write a number and a unit, e.g. "
                          f"\"{text.strip()} {ALLOWED[kind][0]}\" (units: {', '.join(ALLOWED[kind])})")
+    # The text as the user wrote it, for errors about the value (show());
+    # astropy keeps it on this Quantity only, not on what is computed from it.
+    value.info.description = " ".join(text.split())
     return value
 
 
+def _unit_error(error: Exception) -> str:
+    """astropy's complaint about a unit, without its advice on defining
+    custom units: "parsecs is not a valid unit. Did you mean parsec?"."""
+    message = str(error).split(" If this is meant to be a custom unit")[0]
+    message = re.sub(r"^'[^']*' did not parse as unit: (At col \d+, )?", "", message)
+    return message.strip()
+
+
 def show(value: Any) -> str:
-    """A value for an error message: a Quantity as "-1 jupiterMass", anything else as its repr."""
+    """A value for an error message: a Quantity read by :func:`parse` as the
+    user wrote it ("-1 Mjup"), another as astropy writes it ("-1 jupiterMass"),
+    anything else as its repr."""
+    written = getattr(getattr(value, "info", None), "description", None)
+    if isinstance(written, str) and written:
+        return written
     if hasattr(value, "unit") and hasattr(value, "value"):
         return f"{value.value:g} {value.unit}" if value.isscalar else str(value)
     return repr(value)

@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from rebound_pfvi import compare, report, scenes
+from rebound_pfvi import compare, report, runs, scenes
 from rebound_pfvi.__main__ import main
 from rebound_pfvi.runs import Run
 
@@ -124,8 +124,15 @@ def test_quick_cli_run_writes_table_data_and_png_with_every_integrator(tmp_path,
     families = {r["family"] for r in data["rows"] if r["status"] == "ok"}
     assert families == set(compare.FAMILIES)
     table = (out / "kepler-e0.9.md").read_text()
-    for label in ("pfvi s=6", "pfvi s=8", "pfvi seed s=4 phase reversible", "IAS15", "WHFast", "LEAPFROG", "BS"):
+    for label in ("pfvi s=6", "pfvi s=8", "pfvi seed s=4 phase reversible", "IAS15", "WHFast", "LEAPFROG", "BS",
+                  "WHFast corrector=11 safe_mode=0", "TRACE", "MERCURIUS"):
         assert f"| {label} |" in table
+    # TRACE and MERCURIUS run at REBOUND's defaults, with their knob the step; WHFast's corrector is set.
+    rows = {(r["line"], r["value"]): r for r in data["rows"]}
+    assert rows[("TRACE", 1000)]["knob"] == rows[("MERCURIUS", 1000)]["knob"] == "steps/period"
+    corrected = rows[("WHFast corrector=11 safe_mode=0", 1000)]
+    assert corrected["options"] == {"corrector": 11, "safe_mode": 0}
+    assert corrected["position_error"] != rows[("WHFast", 1000)]["position_error"]
     png = (out / "kepler-e0.9.png").read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20000
     assert len((out / "kepler-e0.9.csv").read_text().splitlines()) == data["settings"] + 1
@@ -155,7 +162,10 @@ def test_main_job_is_the_comet_and_its_page_says_who_is_fastest_and_why(tmp_path
     winner = min(best.values(), key=lambda r: r["wall_s"])
     # The sentence names the measured winner, its time and its force evaluations.
     sentence = next(line for line in page.splitlines() if line.startswith("- To 1e-02 AU: "))
-    assert sentence.startswith(f"- To 1e-02 AU: {winner['line']} ") and f"{winner['wall_s']:.3g} s" in sentence
+    if sentence.startswith("- To 1e-02 AU: a tie within the run-to-run noise"):
+        assert f"{winner['line']} ({report._knob(winner)}) {winner['wall_s']:.3g} s" in sentence
+    else:
+        assert sentence.startswith(f"- To 1e-02 AU: {winner['line']} ") and f"{winner['wall_s']:.3g} s" in sentence
     if winner["family"] != "pfvi":
         assert f"needs {winner['force_evaluations']} force evaluations" in sentence
     assert "- To 1e-02 AU: " in capsys.readouterr().out
@@ -175,7 +185,9 @@ def test_main_job_is_the_comet_and_its_page_says_who_is_fastest_and_why(tmp_path
     (["compare", "--periods", "-3"], ["periods", "positive"]),
     (["paper", "fig4"], ["figure", "fig2"]),
     (["compare", "--a", "2"], ["argument --a: '2' has no unit", 'e.g. "2 AU"']),
-    (["compare", "--scene", "kepler", "--m", "-1 Mjup"], ["m=-1 jupiterMass is negative"]),
+    (["compare", "--scene", "kepler", "--m", "-1 Mjup"], ["m=-1 Mjup is negative"]),
+    (["compare", "--scene", "kepler", "--mass", "-2.5e30  kg"], ["mass=-2.5e30 kg"]),
+    (["compare", "--a", "2 parsecs"], ["--a", "parsecs is not a valid unit. Did you mean parsec?", "units: AU"]),
     (["compare", "--mass", "1 Msun"], ["--mass", "not a parameter of scene 'comet'"]),
     (["compare", "--budget", "0"], ["argument --budget: '0' must be positive"]),
 ])
@@ -186,9 +198,90 @@ def test_argument_errors_name_the_argument(argv, words, capsys):
     err = capsys.readouterr().err
     for word in words:
         assert word in err, (word, err)
-    assert "<Quantity" not in err and "has unit ," not in err
+    assert "<Quantity" not in err and "has unit ," not in err and "def_unit" not in err
+    assert len(err.strip().splitlines()[-1]) < 300, err  # one readable line, not astropy's advice
     # The usage is the subcommand's, whether argparse or the command found the error.
     assert err.startswith(f"usage: rebound-pfvi {argv[0]} "), err
+
+
+@pytest.mark.parametrize("command", [["compare", "--repeats", "1"], ["stability", "--cases", "kepler-e0.99"],
+                                     ["paper", "fig3", "--periods", "0.1"]])
+@pytest.mark.parametrize("where", ["a file", "inside a file", "/proc"])
+def test_an_output_folder_that_cannot_be_written_is_refused_before_anything_runs(command, where, tmp_path,
+                                                                                 monkeypatch, capsys):
+    from rebound_pfvi import paper, stability
+
+    def must_not_run(*args, **kwargs):
+        raise AssertionError("the sweep started before --output was checked")
+
+    for module, name in ((compare, "run"), (stability, "run_all"), (paper, "figure3")):
+        monkeypatch.setattr(module, name, must_not_run)
+    (tmp_path / "taken").write_text("a file, not a folder")
+    output = {"a file": tmp_path / "taken", "inside a file": tmp_path / "taken" / "results",
+              "/proc": "/proc/rebound-pfvi-results"}[where]
+    with pytest.raises(SystemExit) as stop:
+        main(command + ["--output", str(output)])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert f"argument --output: cannot write to the folder '{output}'" in err, err
+    assert "Traceback" not in err
+
+
+def test_an_output_folder_is_created_and_left_empty_by_the_check(tmp_path):
+    from rebound_pfvi.__main__ import build_parser, check_output
+
+    folder = tmp_path / "new" / "results"
+    check_output(build_parser(), str(folder))
+    assert folder.is_dir() and list(folder.iterdir()) == []
+
+
+def test_an_unreachable_scheduler_is_one_line_before_anything_runs(monkeypatch, capsys, tmp_path):
+    pytest.importorskip("distributed")
+    from rebound_pfvi import __main__ as cli
+
+    monkeypatch.setattr(cli, "CONNECT_TIMEOUT_S", 1.0)
+    monkeypatch.setattr(compare, "run", lambda *a, **k: pytest.fail("the sweep started without a scheduler"))
+    with pytest.raises(SystemExit) as stop:
+        main(["compare", "--scheduler", "tcp://127.0.0.1:1", "--output", str(tmp_path)])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("rebound-pfvi compare: error: argument --scheduler: could not connect to a Dask "
+                           "scheduler at 'tcp://127.0.0.1:1' (waited up to 1 s)"), err
+    assert "Traceback" not in err
+
+
+def test_progress_off_a_terminal_is_one_line_per_finished_run():
+    import io
+
+    from rebound_pfvi.__main__ import Progress
+
+    log = io.StringIO()  # not a terminal: a log file, a pipe, CI
+    bar = Progress(3, stream=log)
+    for done, verdict in enumerate(("accurate", "inaccurate", "refused"), 1):
+        run = Run(runs.COMPARE, "kepler", "ias15", "IAS15", knob="epsilon", value=10.0**-done, status="ok",
+                  verdict=verdict)
+        bar(done, 3, run)
+    bar.close()
+    lines = log.getvalue().splitlines()
+    assert "\r" not in log.getvalue() and len(lines) == 3, lines
+    assert lines[0].startswith("[1/3 runs, ") and lines[0].endswith("IAS15 epsilon=0.1: accurate")
+    assert lines[2].startswith("[3/3 runs, ") and lines[2].endswith("IAS15 epsilon=0.001: refused")
+    # On a terminal: tqdm's bar, with runs done of the total and the time left.
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    screen = Terminal()
+    bar = Progress(3, stream=screen)
+    bar(3, 3, run)
+    assert "3/3 [" in screen.getvalue() and "\r" in screen.getvalue()
+    # Steps that are not runs (figure 2's samples) give a line per tenth, not per step.
+    log = io.StringIO()
+    bar = Progress(2000, unit="sample", stream=log)
+    for k in range(1, 2001):
+        bar(k, 2000)
+    assert len(log.getvalue().splitlines()) == 10 and log.getvalue().splitlines()[-1].startswith("[2000/2000 samples")
 
 
 @pytest.mark.parametrize("command, default", [("compare", "rebound-pfvi-results"),
@@ -387,3 +480,32 @@ def test_version_names_the_package_and_rebound():
     from importlib.metadata import version
 
     assert rebound_pfvi.__version__ == version("rebound_pfvi")  # the installed distribution's (pyproject)
+
+
+def _timed(family, label, knob, value, wall, error, evaluations=100):
+    return Run(runs.COMPARE, "comet", family, label, knob=knob, value=value, status="ok", verdict="accurate",
+               wall_s=wall, position_error=error, force_evaluations=evaluations)
+
+
+def test_pages_call_differences_within_the_noise_ties_and_say_what_each_ratio_is_of():
+    from types import SimpleNamespace
+
+    near = 1.0 + 0.5 * (report.TIE_RATIO - 1.0)  # inside the noise
+    rows = [_timed("pfvi", "pfvi s=8", "epsilon", 1e-6, 0.010, 1e-3),
+            _timed("bs", "BS", "eps", 1e-7, 0.010 * near, 1e-3),
+            _timed("ias15", "IAS15", "epsilon", 1e-5, 0.050, 1e-3),
+            _timed("whfast", "WHFast", "steps/period", 1000, 0.001, 1e-1)]
+    results = SimpleNamespace(rows=rows)
+    sentence = report.conclusions(results)[0]
+    assert sentence.startswith("To 1e-02 AU: a tie within the run-to-run noise"), sentence
+    assert "pfvi s=8 (epsilon 1e-06) 0.01 s, BS (eps 1e-07" in sentence
+    assert "next, IAS15 (epsilon 1e-05) takes 5.0x the wall time of pfvi s=8" in sentence
+    table = report.summary_table(rows)
+    first = next(line for line in table.splitlines() if line.startswith("| 1e-02"))
+    assert first.count("**") == 4, first  # pfvi and BS in bold, IAS15 not
+    # Outside the noise there is one fastest, and the ratio says of what to what.
+    rows[1] = _timed("bs", "BS", "eps", 1e-7, 0.010 * report.TIE_RATIO * 1.5, 1e-3)
+    sentence = report.conclusions(SimpleNamespace(rows=rows))[0]
+    assert sentence.startswith("To 1e-02 AU: pfvi s=8 (epsilon 1e-06) is fastest, 0.01 s; next, BS (eps 1e-07) "
+                               "takes "), sentence
+    assert "the wall time of pfvi s=8" in sentence

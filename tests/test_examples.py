@@ -43,6 +43,6 @@ def test_notebook_cells(tmp_path, monkeypatch):
     for cell in notebook["cells"]:
         if cell["cell_type"] == "code":
             exec(compile("".join(cell["source"]), "work_precision.ipynb", "exec"), namespace)
-    assert len(namespace["table"]) == 12
+    assert len(namespace["table"]) == 15
     assert (tmp_path / "comet-results" / "comet-e0.95.png").exists()
     assert namespace["sim"].integrator.n_steps > 0

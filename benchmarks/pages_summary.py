@@ -1,0 +1,76 @@
+"""The table of docs/results.md, "What the pages show", from the pages' JSON
+files: for each page and position error (1e-6, 1e-8, 1e-10 AU), pfvi at its
+defaults (the line "pfvi s=8") and IAS15, each its least wall time to that
+error within the sweep, their ratio, and the fastest line of all with every
+line tied with it (within report.TIE_RATIO, the run-to-run noise).
+Then, per family, the pages and errors where it is the fastest or tied.
+
+    python3 -P benchmarks/pages_summary.py [docs/results]
+"""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Dict, List
+
+from rebound_pfvi import report
+from rebound_pfvi.runs import Run
+
+TARGETS = (1e-6, 1e-8, 1e-10)
+DEFAULT_LINE = "pfvi s=8"
+#: Page order and names, as docs/results.md lists them.
+PAGES = {"kepler-e0.5": "Kepler e = 0.5", "kepler-e0.9": "Kepler e = 0.9", "kepler-e0.95": "Kepler e = 0.95",
+         "kepler-e0.99": "Kepler e = 0.99", "comet-e0.95": "comet", "triple-e0.7": "triple",
+         "jupiter-comet": "Jupiter-family comet", "retrograde": "retrograde crosser",
+         "sungrazer-e0.999": "sungrazer", "circumbinary": "circumbinary planet",
+         "outer-solar-system": "outer solar system", "periodic-box": "periodic box",
+         "mercury-gr": "Mercury with \"gr\"", "oscillator": "oscillator"}
+
+
+def _s(seconds: float) -> str:
+    return f"{seconds:.2g} s"
+
+
+def main() -> None:
+    folder = Path(sys.argv[1] if len(sys.argv) > 1 else "docs/results")
+    lines = ["| page | error | pfvi defaults / IAS15 (wall time) | fastest, and lines tied with it |",
+             "|---|---|---|---|"]
+    wins: Dict[str, List[str]] = {}
+    for slug, name in PAGES.items():
+        path = folder / f"{slug}.json"
+        if not path.exists():
+            continue
+        rows = [Run.from_dict(r) for r in json.loads(path.read_text())["rows"]]
+        for target in TARGETS:
+            best = report.fastest(rows, target)
+            if not best:
+                lines.append(f"| {name} | {target:.0e} AU | - | no run gets there |")
+                continue
+            order = sorted(best.values(), key=lambda r: r.wall_s)
+            first = [r for r in order if report.tied(order[0], r)]
+            pfvi, ias15 = best.get(DEFAULT_LINE), best.get("IAS15")
+            if pfvi and ias15:
+                ratio = f"{_s(pfvi.wall_s)} / {_s(ias15.wall_s)} = **{pfvi.wall_s / ias15.wall_s:.2f}**"
+            elif pfvi:
+                ratio = f"{_s(pfvi.wall_s)} / IAS15 does not get there"
+            elif ias15:
+                ratio = f"pfvi s=8 does not get there / {_s(ias15.wall_s)}"
+            else:
+                ratio = "neither gets there"
+            fastest = ", ".join(f"{r.label} {_s(r.wall_s)}" for r in first)
+            if len(first) > 1:
+                fastest = "tie: " + fastest
+            lines.append(f"| {name} | {target:.0e} AU | {ratio} | {fastest} |")
+            for r in first:
+                where = f"{name} {target:.0e}"
+                if where not in wins.setdefault(r.family, []):
+                    wins[r.family].append(where)
+    print("\n".join(lines))
+    print("\nFastest or tied, per family:")
+    for family, where in sorted(wins.items()):
+        print(f"- {family}: {len(where)}: {', '.join(where)}")
+
+
+if __name__ == "__main__":
+    main()
