@@ -40,7 +40,7 @@ const struct reb_integrator pfvi_integrator = {
     "to " PFVI_STR(PFVI_STAGES_MAX) " Gauss-Lobatto nodes and interior corrections (K&V, 'Increasing the algebraic "
     "order'; Marsden & West 2001, section 2.6) the order is 2s - 2 and each step solves for the stage "
     "points by fixed-point iteration, stopped as in IRKGL16 (Antonana, Makazaga & "
-    "Murua 2017, J. Comput. Phys.) or once the change is below " PFVI_STR(PFVI_ITERATION_ROUNDOFF) " "
+    "Murua 2017, Numer. Algorithms, doi:10.1007/s11075-017-0287-z) or once the change is below " PFVI_STR(PFVI_ITERATION_ROUNDOFF) " "
     "(relative); a solve that does not converge is retried shorter or refused. "
     "Steps are adaptive by default (epsilon = " PFVI_STR(PFVI_EPSILON_DEFAULT) ", step_control = "
     "'symmetric'): h = kappa/rho with rho tracking a density of every orbit's and every encounter's "
