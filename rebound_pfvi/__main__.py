@@ -6,6 +6,7 @@ scene), ``stability`` (stiff and extreme cases), ``paper fig1|fig2|fig3``
 (astropy, matplotlib, dask) happen only in the command that needs them.
 """
 import argparse
+import math
 import os
 import shlex
 import sys
@@ -81,7 +82,7 @@ def _positive_float(text):
 def _families(text):
     from .compare import FAMILIES
 
-    names = [n.strip().lower() for n in text.split(",") if n.strip()]
+    names = list(dict.fromkeys(n.strip().lower() for n in text.split(",") if n.strip()))  # each once
     bad = [n for n in names if n not in FAMILIES]
     if bad or not names:
         raise argparse.ArgumentTypeError(f"{', '.join(bad) or repr(text)} not an integrator family; "
@@ -143,14 +144,21 @@ def build_parser() -> argparse.ArgumentParser:
 
     compare = commands.add_parser(
         "compare", help="error against run time: pfvi, IAS15, WHFast, LEAPFROG, BS, TRACE, MERCURIUS on a scene",
-        description="Sweeps every integrator's accuracy knob on a scene and writes <scene>.md (who is fastest "
+        description="Sweeps every integrator's accuracy knob on a scene and writes <name>.md (who is fastest "
                     "at each accuracy and why, a verdict on every run, the tables), .json, .csv and .png "
-                    "(work-precision diagram) to --output.")
+                    "(work-precision diagram) to --output; <name> is the scene's, with its e where it has "
+                    "one (comet-e0.95, kepler-e0.99, outer-solar-system).")
     compare.add_argument("--scene", default="comet", choices=tuple(scenes_module.SCENES),
                          help="default comet (Sun, Jupiter and an e = 0.95 comet, 3 comet periods: no "
                               "integrator is exact on it); kepler: two bodies, e = 0.95, 100 periods; "
-                              "jupiter-comet, retrograde, sungrazer, circumbinary, outer-solar-system, "
-                              "periodic-box: the step control's hard cases (docs/step-control.md)")
+                              "triple: a hierarchical stellar triple; oscillator: a 2-D harmonic oscillator "
+                              "(no gravity); mercury-gr: Mercury with REBOUNDx's \"gr\" (the [reboundx] extra); "
+                              "the step control's hard cases (docs/step-control.md): jupiter-comet (a comet "
+                              "passing Jupiter at 0.34 AU), retrograde (a body crossing Jupiter's orbit), "
+                              "sungrazer (q = 0.02 AU beside Jupiter), circumbinary (a Kepler-16-like planet), "
+                              "outer-solar-system (the giant planets and a Pluto-like body), periodic-box "
+                              "(softened bodies meeting through a periodic boundary). The parameters each takes "
+                              "are in brackets below")
     for option, (_, kind, scenes, text) in SCENE_OPTIONS.items():
         compare.add_argument(option, type=_number(kind) if kind == "number" else _quantity(kind), default=None,
                              help=f"{text} [{', '.join(scenes)}]")
@@ -293,19 +301,58 @@ def invocation(argv: List[str]) -> str:
     return " ".join([program] + [shlex.quote(a) for a in argv])
 
 
-def check_output(parser: argparse.ArgumentParser, folder: str, option: str = "--output") -> None:
-    """Creates `folder` and writes (then removes) a file in it, before any run
-    starts: a folder that cannot be written is an error now, not a traceback
-    after the sweep, when its results would be lost."""
+def check_output(parser: argparse.ArgumentParser, folder: str, names: Sequence[str] = (),
+                 option: str = "--output") -> None:
+    """Creates `folder` and checks that the files `names` can be written in
+    it (an existing one is opened for appending, which changes nothing; a
+    new one is made and removed), before any run starts: a folder that
+    cannot be written is an error now, not a traceback after the sweep, when
+    its results would be lost. Folders it made are removed again if the
+    check fails."""
+    import shutil
     import tempfile
 
+    if not folder:
+        parser.error(f"argument {option}: the folder's name is empty")
+    # The outermost folder this check creates, so that a failed check leaves nothing behind.
+    first_new = None
+    path = os.path.abspath(folder)
+    while not os.path.lexists(path):
+        first_new, path = path, os.path.dirname(path)
     try:
+        if os.path.lexists(folder) and not os.path.isdir(folder):
+            raise NotADirectoryError("it exists and is not a folder")
         os.makedirs(folder, exist_ok=True)
         with tempfile.TemporaryFile(dir=folder):
             pass
+        for name in names:
+            target = os.path.join(folder, name)
+            if os.path.lexists(target) and not os.path.isfile(target):
+                raise IsADirectoryError(f"{target!r} exists and is not a file")
+            existed = os.path.exists(target)
+            with open(target, "a"):
+                pass
+            if not existed:
+                os.remove(target)
     except OSError as error:
-        parser.error(f"argument {option}: cannot write to the folder {folder!r}: "
-                     f"{error.strerror or error}")
+        if first_new is not None:
+            shutil.rmtree(first_new, ignore_errors=True)
+        reason = error.strerror if error.strerror else str(error)
+        if error.filename and error.filename != folder and error.strerror:
+            reason += f" ({error.filename})"
+        parser.error(f"argument {option}: cannot write to the folder {folder!r}: {reason}")
+
+
+def _write_elsewhere(write: Any, output: str, error: OSError) -> Any:
+    """The results into a new temporary folder, when writing them to
+    `output` failed after the runs (the disk filled, a file was replaced
+    meanwhile): they are not lost, and the command says where they went."""
+    import tempfile
+
+    folder = tempfile.mkdtemp(prefix="rebound-pfvi-")
+    print(f"error: could not write the results to {output!r} ({error.strerror or error}); "
+          f"writing them to {folder} instead", file=sys.stderr)
+    return write(folder)
 
 
 def _scene_from_args(parser: argparse.ArgumentParser, args: argparse.Namespace) -> Any:
@@ -321,9 +368,23 @@ def _scene_from_args(parser: argparse.ArgumentParser, args: argparse.Namespace) 
                          f"(it applies to: {', '.join(applies)})")
         params[keyword] = value
     try:
-        return scenes.make(args.scene, **params)
+        scene = scenes.make(args.scene, **params)
     except ValueError as error:
+        # The scene names its keyword ("m=-1 Mjup is negative"); the user wrote an option.
+        for option, (keyword, _, _, _) in SCENE_OPTIONS.items():
+            if str(error).startswith(f"{keyword}="):
+                parser.error(f"argument {option}: {error}")
         parser.error(f"scene {args.scene}: {error}")
+    # Values each fine alone can still make a scene no integrator can run
+    # (a = 1e300 pc: a period that overflows; a = 1e-320 AU: bodies at one point).
+    try:
+        duration = scene.t_end
+        if not (math.isfinite(duration) and duration > 0.0):
+            raise ValueError(f"its run would last {duration!r} yr")
+        scene.build()
+    except (ArithmeticError, ValueError, RuntimeError) as error:
+        parser.error(f"scene {args.scene}: these parameters give no scene to integrate: {error}")
+    return scene
 
 
 #: Seconds to wait for a Dask scheduler before --scheduler is an error.
@@ -338,12 +399,31 @@ def _connect(parser: argparse.ArgumentParser, address: str) -> Any:
     except ImportError:
         parser.error("argument --scheduler: sending runs to Dask needs the [dask] extra: "
                      "pip install \"rebound_pfvi[dask]\" (from a clone: pip install \".[dask]\")")
-    try:
-        return Client(address, timeout=CONNECT_TIMEOUT_S)
-    except Exception as error:  # noqa: BLE001 - refused, timed out, or not a scheduler: all one answer here
-        reason = f"{type(error).__name__}: {str(error).splitlines()[0]}" if str(error) else type(error).__name__
-        parser.error(f"argument --scheduler: could not connect to a Dask scheduler at {address!r} "
-                     f"(waited up to {CONNECT_TIMEOUT_S:g} s): {reason}")
+    outcome: Dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            outcome["client"] = Client(address, timeout=CONNECT_TIMEOUT_S)
+        except BaseException as error:  # noqa: BLE001 - whatever stops it is the answer, reported below
+            outcome["error"] = error
+
+    # Dask's own timeout does not cover a peer that accepts and never answers
+    # as a scheduler would (an HTTP server): the connection gets its own deadline.
+    attempt = threading.Thread(target=connect, daemon=True)
+    attempt.start()
+    attempt.join(CONNECT_TIMEOUT_S + 5.0)
+    if "client" in outcome:
+        return outcome["client"]
+    error = outcome.get("error")
+    if error is None:
+        reason = f"no answer as a Dask scheduler within {CONNECT_TIMEOUT_S + 5.0:g} s"
+    elif isinstance(error, (OSError, TimeoutError)):
+        reason = str(error).splitlines()[0] if str(error) else type(error).__name__
+    elif isinstance(error, (MemoryError, OverflowError)):
+        reason = "the peer's answer is not Dask's protocol (is it a Dask scheduler?)"
+    else:
+        reason = f"not a usable Dask address ({type(error).__name__}: {str(error).splitlines()[0] if str(error) else ''})"
+    parser.error(f"argument --scheduler: could not connect to a Dask scheduler at {address!r}: {reason}")
 
 
 def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv: List[str]) -> int:
@@ -357,10 +437,14 @@ def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv:
     if not settings:
         parser.error(f"argument --integrators: none of {', '.join(args.integrators)} applies to scene "
                      f"{scene.name!r} (it takes: {', '.join(scene.families)})")
-    check_output(parser, args.output)
+    left_out = [f for f in (args.integrators or ()) if f not in scene.families]
+    if left_out:
+        print(f"--integrators: {', '.join(left_out)} left out: scene {scene.name!r} takes "
+              f"{', '.join(scene.families)}", file=sys.stderr)
     scheduler = args.scheduler
     if scheduler is not None:
         scheduler = _connect(parser, scheduler)
+    check_output(parser, args.output, [scene.slug + ext for ext in (".md", ".json", ".csv", ".png")])
     print(f"{scene.describe()}: {len(settings)} runs, best of {args.repeats}", flush=True)
     bar = Progress(len(settings))
     try:
@@ -371,7 +455,12 @@ def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv:
         if scheduler is not None:
             scheduler.close()
     command = invocation(argv)
-    paths = report.write(results, args.output, command=command)
+    failed = False
+    try:
+        paths = report.write(results, args.output, command=command)
+    except OSError as error:
+        failed = True
+        paths = _write_elsewhere(lambda folder: report.write(results, folder, command=command), args.output, error)
     if results.interrupted:
         print(f"\nInterrupted: {results.finished} of {len(settings)} runs finished and kept.", file=sys.stderr)
     print(f"Wrote {', '.join(paths.values())} ({results.wall_s:.1f} s)")
@@ -387,7 +476,7 @@ def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv:
     caveat = report.whfast_caveat(results)
     if caveat:
         print(caveat.replace("**", "").replace("`", ""))
-    return 130 if results.interrupted else 0
+    return 130 if results.interrupted else 1 if failed else 0
 
 
 def run_paper(args: argparse.Namespace, argv: List[str]) -> int:
@@ -397,7 +486,7 @@ def run_paper(args: argparse.Namespace, argv: List[str]) -> int:
     if args.stages is not None and args.stages not in STAGES:
         args.subparser.error(f"argument --stages: {args.stages} is not one of {', '.join(map(str, STAGES))}")
 
-    check_output(args.subparser, args.output)
+    check_output(args.subparser, args.output, [f"figure{args.figure[-1]}{ext}" for ext in (".md", ".json", ".png")])
     if args.figure == "fig1":
         stages, control = args.stages or 2, args.step_control or "seed"
         bar = Progress(len(seed_paper.ECCENTRICITIES) * len(seed_paper.EPSILONS), unit="tolerance")
@@ -450,7 +539,7 @@ def run_stability(args: argparse.Namespace, argv: List[str]) -> int:
         for name, case in stability.cases().items():
             print(f"{name:20s} {case.title}")
         return 0
-    check_output(args.subparser, args.output)
+    check_output(args.subparser, args.output, ["stability.md", "stability.json"])
     configs = stability.default_configs(args.integrators, epsilon=args.epsilon)
     names = args.cases or list(stability.cases())
     total = len(names) * len(configs)
@@ -465,10 +554,16 @@ def run_stability(args: argparse.Namespace, argv: List[str]) -> int:
     finally:
         bar.close()
     command = invocation(argv)
-    paths = report_module.write_stability(report, args.output, command=command)
+    failed = False
+    try:
+        paths = report_module.write_stability(report, args.output, command=command)
+    except OSError as error:
+        failed = True
+        paths = _write_elsewhere(lambda folder: report_module.write_stability(report, folder, command=command),
+                                 args.output, error)
     print(f"Wrote {', '.join(map(str, paths))} ({report.wall_s:.0f} s)")
     _print_verdicts(report_module.stability_verdict_counts(report), report.rows)
-    return 0
+    return 1 if failed else 0
 
 
 def _print_verdicts(counts: Dict[str, Dict[str, int]], rows: Sequence["Run"]) -> None:

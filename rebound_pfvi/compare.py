@@ -9,7 +9,8 @@ Each setting is run by :func:`run_setting`, which
    gives the final relative energy error and the position error against the
    scene's reference;
 2. runs once more, untimed, stopping at ``samples`` evenly spaced times
-   without changing the steps (``exact_finish_time=0``) to find the largest
+   without changing the steps (``exact_finish_time=0``; exactly at them for
+   a scene whose energy holds only within the run) to find the largest
    relative energy error, with a callback in ``additional_forces`` that adds
    nothing and counts force evaluations;
 3. gives the run its verdict (:mod:`rebound_pfvi.verdict`: accurate,
@@ -29,6 +30,7 @@ astropy Quantities at the boundary.
 """
 from __future__ import annotations
 
+import functools
 import math
 import os
 import time
@@ -53,6 +55,22 @@ KNOBS = {"pfvi": "epsilon", "ias15": "epsilon", "bs": "eps", "whfast": "steps/pe
          "leapfrog": "steps/period", "trace": "steps/period", "mercurius": "steps/period"}
 
 
+#: The fields each family's knob sets (configure() sets them from a setting's value).
+KNOB_FIELDS = {"pfvi": ("epsilon",), "ias15": ("epsilon",), "bs": ("eps_abs", "eps_rel")}
+
+
+@functools.lru_cache(maxsize=None)
+def family_fields(family: str) -> Tuple[str, ...]:
+    """The settable fields of a family's integrator, as REBOUND lists them."""
+    import rebound
+
+    from .integrators import _fields
+
+    sim = rebound.Simulation()
+    sim.integrator = family
+    return tuple(sorted(_fields(sim)))
+
+
 @dataclass(frozen=True)
 class Setting:
     """One run of a sweep: `family` with `options`, at knob value `value`."""
@@ -70,6 +88,14 @@ class Setting:
             raise ValueError(f"family={self.family!r} is not an integrator family; allowed: {', '.join(FAMILIES)}")
         if not (isinstance(self.value, (int, float)) and self.value > 0 and math.isfinite(self.value)):
             raise ValueError(f"{KNOBS[self.family]}={self.value!r} for {self.family} must be a positive number")
+        fields = family_fields(self.family)
+        for name, _ in self.options:
+            if name in KNOB_FIELDS.get(self.family, ()):
+                raise ValueError(f"options: {name} is {self.family}'s accuracy knob, the setting's value; "
+                                 f"not an option here")
+            if name not in fields:
+                raise ValueError(f"options: {name!r} is not an option of {self.family}; it has: "
+                                 f"{', '.join(sorted(fields))}")
         if not self.line:
             if self.family == "pfvi":
                 label = pfvi_label(dict(self.options))
@@ -292,8 +318,12 @@ def _run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repe
         _install_counter(sim, scene, counter)
         configure(sim, scene, setting)
         worst = 0.0
+        # A scene whose energy holds only within the run is sampled at the
+        # sampling times exactly (BS with exact_finish_time = 0 was seen to stop
+        # far beyond t_end, and before t0, where a body has wrapped).
+        exact = 1 if scene.energy_until_t_end else 0
         for k in range(1, samples):
-            _integrate(sim, t0 + (t_end - t0) * k / samples, 0, deadline, fraction)
+            _integrate(sim, t0 + (t_end - t0) * k / samples, exact, deadline, fraction)
             worst = max(worst, abs(scene.energy(sim) / E0 - 1.0))
             if not math.isfinite(worst):
                 break

@@ -81,6 +81,9 @@ def fastest(rows: Iterable[Run], target: float) -> Dict[str, Run]:
     """For each line, the run with the least wall time whose position error is <= target."""
     best: Dict[str, Run] = {}
     for r in rows:
+        wall = _number(r.wall_s)
+        if not (math.isfinite(wall) and wall > 0.0):
+            continue  # no usable time: it cannot be ranked
         if r.status == "ok" and _number(r.position_error) <= target:
             if r.label not in best or _number(r.wall_s) < _number(best[r.label].wall_s):
                 best[r.label] = r
@@ -159,7 +162,8 @@ def whfast_caveat(results: Results) -> str:
 
 
 def _times(ratio: float) -> str:
-    return f"{ratio:.0f}x" if ratio >= 10 else f"{ratio:.1f}x"
+    """A ratio of wall times, with the digits that tell a tie (TIE_RATIO) from a win."""
+    return f"{ratio:.0f}x" if ratio >= 10 else f"{ratio:.1f}x" if ratio >= 2 else f"{ratio:.2f}x"
 
 
 def _per_evaluation(row: Run) -> float:
@@ -195,7 +199,8 @@ def conclusions(results: Results, floor: float = 0.0, length: str = "AU") -> Lis
             text += (f"; next, {other.label} ({_knob(other)}) takes {_times(_number(other.wall_s) / win_s)} "
                      f"the wall time of {win.label}")
         pfvi = next((r for r in order if r.family == "pfvi"), None)
-        if all(r.family != "pfvi" for r in first):
+        ran_pfvi = any(r.family == "pfvi" for r in results.rows)
+        if all(r.family != "pfvi" for r in first) and ran_pfvi:
             if pfvi is None:
                 text += "; no pfvi run of the sweep gets there"
             else:
@@ -205,8 +210,8 @@ def conclusions(results: Results, floor: float = 0.0, length: str = "AU") -> Lis
                          f"{win.force_evaluations} force evaluations at {_per_evaluation(win):.2g} µs each, "
                          f"pfvi {pfvi.force_evaluations} at {_per_evaluation(pfvi):.2g} µs")
         elif other:
-            lead = pfvi if pfvi is not None else win
-            text += (f": {lead.label} needs {lead.force_evaluations} force evaluations at "
+            lead = pfvi if pfvi is not None and pfvi in first else win
+            text += (f"; {lead.label} needs {lead.force_evaluations} force evaluations at "
                      f"{_per_evaluation(lead):.2g} µs each, {other.label} {other.force_evaluations} at "
                      f"{_per_evaluation(other):.2g} µs")
         sentences.append(text + ".")

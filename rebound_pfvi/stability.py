@@ -596,7 +596,10 @@ def run_all(case_names: Optional[Sequence[str]] = None, configs: Optional[Sequen
         nonlocal ended
         ended += 1
         if progress:
-            progress(ended, len(tasks), runs.from_outcome(_identity(*pairs[index], budget), outcome))
+            row = runs.from_outcome(_identity(*pairs[index], budget), outcome)
+            if row.status not in runs.FINISHED:  # refused, over budget, crashed: judged without the reference
+                row.verdict, row.verdict_detail = judge(table[pairs[index][0]], row)
+            progress(ended, len(tasks), row)
 
     outcomes = runner.run_tasks(tasks, workers, fresh=True, done=record)
     rows = []

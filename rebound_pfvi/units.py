@@ -104,7 +104,7 @@ def to_scene(value: Any, kind: str, name: str) -> float:
             # Frequencies may be given in rad/time; radians are dimensionless here.
             number = value.to_value(unit, equivalencies=u.dimensionless_angles())
         except u.UnitConversionError:
-            raise ValueError(f"{name}={value} has unit {value.unit}, which is not a {kind}; "
+            raise ValueError(f"{name}={show(value)} has unit {value.unit}, which is not a {kind}; "
                              f"allowed: {', '.join(ALLOWED.get(kind, (str(unit),)))}") from None
         number = float(number)
         if not math.isfinite(number):
