@@ -30,7 +30,7 @@ C. A hierarchical system: star 1, planet 1e-3 at a = 1 (e = 0.05), moon
 D. Long-term energy: e = 0.95, P/2000 steps, 2000 orbits, s = 2 and 4: the
    largest relative energy error in the first and last tenth, sampled 20
    times per orbit.
-E. Under the default adaptive step control (reversible, epsilon 1e-6 and
+E. Under the default adaptive step control (symmetric, epsilon 1e-6 and
    1e-9, s = 4 and 6): steps, final position error and wall time (best of
    2) of "none", the seed's "phase" and "exact radial" on Kepler e = 0.5,
    0.9, 0.95 (20 periods), the comet and the triple (1 period): what the
@@ -307,10 +307,9 @@ def markdown(A, B, C, D, E, args, seconds: float) -> str:
     for r in D:
         out.append(f"| {r['s']} | {r['scheme']} | {r['first']:.2e} | {r['last']:.2e} | "
                    f"{r['last']/r['first'] if r['first'] > 0 else math.nan:.2f} | {r['seconds']:.1f} |")
-    out += ["", "## E. The osculating-circle step control (\"reversible\", the default before the symmetric one): "
-            "what fitting changes there", "",
-            "Final position error [AU] and wall time (best of 2) at the steps the osculating-circle estimate "
-            "chose; time relative to \"none\" in brackets.", "",
+    out += ["", "## E. The default adaptive step control (symmetric): what fitting changes there", "",
+            "Final position error [AU] and wall time (best of 2) at the steps the default control chose; "
+            "time relative to \"none\" in brackets.", "",
             "| scene | epsilon | s | steps (none / phase / exact) | none | seed phase | exact radial |",
             "|---|---|---|---|---|---|---|"]
     for k in range(0, len(E), 3):
