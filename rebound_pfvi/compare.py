@@ -64,11 +64,11 @@ def family_fields(family: str) -> Tuple[str, ...]:
     """The settable fields of a family's integrator, as REBOUND lists them."""
     import rebound
 
-    from .integrators import _fields
+    from .integrators import integrator_fields
 
     sim = rebound.Simulation()
     sim.integrator = family
-    return tuple(sorted(_fields(sim)))
+    return tuple(sorted(integrator_fields(sim)))
 
 
 @dataclass(frozen=True)

@@ -63,7 +63,7 @@ def pfvi_label(options: Mapping[str, Any]) -> str:
     return label
 
 
-def _fields(sim: rebound.Simulation) -> set:
+def integrator_fields(sim: rebound.Simulation) -> set:
     """The settable fields of sim's integrator (REBOUND's field descriptors)."""
     descriptors = sim.integrator.callbacks.field_descriptor_list
     return {fd.name.decode() for fd in descriptors} if descriptors else set()
@@ -77,7 +77,7 @@ def configure(sim: rebound.Simulation, family: str, dt: float | None = None, **o
     if family == "bs" and "eps" in options:
         eps = options.pop("eps")
         options.update(eps_abs=eps, eps_rel=eps)
-    fields = _fields(sim)
+    fields = integrator_fields(sim)
     for name, value in options.items():
         if name not in fields:
             raise ValueError(f"{name}={value!r} is not an option of {family}; it has: {', '.join(sorted(fields))}")

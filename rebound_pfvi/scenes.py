@@ -734,8 +734,11 @@ class PeriodicBox(Scene):
         of every pair over the same images REBOUND's gravity sums (the box
         and its ghost boxes). ``sim.energy()`` leaves the images out, so it
         changes as bodies meet through the boundary."""
-        G, b2, L = sim.G, sim.softening**2, self.SIZE
-        shifts = [(gx * L, gy * L) for gx in (-1, 0, 1) for gy in (-1, 0, 1)]  # N_ghost_x = N_ghost_y = 1
+        G, b2 = sim.G, sim.softening**2
+        # The images gravity sums: the box is N_root root boxes a side; no ghosts in z here.
+        Lx, Ly = sim.root_size * sim.N_root_x, sim.root_size * sim.N_root_y
+        nx, ny = sim.N_ghost_x, sim.N_ghost_y
+        shifts = [(gx * Lx, gy * Ly) for gx in range(-nx, nx + 1) for gy in range(-ny, ny + 1)]
         ps = sim.particles
         total = sum(0.5 * p.m * (p.vx * p.vx + p.vy * p.vy + p.vz * p.vz) for p in ps)
         for i in range(sim.N):

@@ -720,48 +720,53 @@ const char* pfvi_option_value_name(const char* field, int i){
     return NULL;
 }
 
-int pfvi_partners(struct reb_simulation* r, size_t* out){
-    const size_t N = r->N;
-    const size_t n = pfvi_ghost_box_count(r);
-    struct pfvi_partner* const partners = malloc((N ? N : 1)*sizeof(*partners));
-    struct reb_vec6d* const images = malloc(n*sizeof(*images));
-    if (!partners || !images){
-        free(partners);
-        free(images);
+// The pairs' field of r for the two inspection entry points below (called
+// from Python, not per step): the integrator's own pfvi_field_of on a scratch
+// state, and a partner slot per particle; 0 if out of memory. The caller frees
+// *partners and scratch->images.
+static int pfvi_inspection_field(struct reb_simulation* r, struct pfvi_state* scratch, struct pfvi_field* field,
+    struct pfvi_partner** partners){
+    *scratch = (struct pfvi_state){0};
+    *partners = malloc((r->N ? r->N : 1)*sizeof(**partners));
+    if (!*partners || !pfvi_field_of(r, scratch, field)){
+        free(*partners);
+        free(scratch->images);
         return 0;
     }
-    pfvi_ghost_boxes(r, images);
-    const struct pfvi_field field = {(r->gravity == REB_GRAVITY_NONE) ? 0. : r->G, r->softening*r->softening,
-        r->N_active, n, images};
+    return 1;
+}
+
+int pfvi_partners(struct reb_simulation* r, size_t* out){
+    const size_t N = r->N;
+    struct pfvi_state scratch;
+    struct pfvi_field field;
+    struct pfvi_partner* partners;
+    if (!pfvi_inspection_field(r, &scratch, &field, &partners)){
+        return 0;
+    }
     pfvi_partner_search(r->particles, N, &field, partners);
     for (size_t i=0; i<N; i++){
         out[i] = (partners[i].j == SIZE_MAX) ? N : partners[i].j;
     }
     free(partners);
-    free(images);
+    free(scratch.images);
     return 1;
 }
 
 int pfvi_density_of(struct reb_simulation* r, int stages, double* out){
-    const size_t N = r->N;
     if (stages < PFVI_STAGES_MIN || stages > PFVI_STAGES_MAX){
         return 0;
     }
-    const size_t n = pfvi_ghost_box_count(r);
-    struct pfvi_partner* const partners = malloc((N ? N : 1)*sizeof(*partners));
-    struct reb_vec6d* const images = malloc(n*sizeof(*images));
-    if (!partners || !images){
-        free(partners);
-        free(images);
+    struct pfvi_state scratch;
+    struct pfvi_field field;
+    struct pfvi_partner* partners;
+    if (!pfvi_inspection_field(r, &scratch, &field, &partners)){
         return 0;
     }
-    pfvi_ghost_boxes(r, images);
-    const struct pfvi_field field = {(r->gravity == REB_GRAVITY_NONE) ? 0. : r->G, r->softening*r->softening,
-        r->N_active, n, images};
     reb_simulation_update_acceleration(r);
-    const int paired = pfvi_step_density(r->particles, NULL, N, &field, stages, partners, &out[0], &out[1]);
+    const int paired = pfvi_step_density(r->particles, NULL, r->N, &field, stages, partners, &out[0], &out[1]);
     free(partners);
-    free(images);
+    free(scratch.images);
     return paired;
 }
 
