@@ -302,3 +302,24 @@ def test_density_cost_is_its_pairs():
     sim.N_active = 2
     sigma, _ = density(sim)
     assert sigma > 0.0
+
+
+def test_lambda_falls_back_to_exactly_one_and_the_track_goes_on():
+    """The density scale lowered after retakes was lambda*(1/lambda), which
+    can round to 0.9999999999999999; the next step took that for a damaged
+    value and restarted the track (a retrograde crossing at 0.24 AU, s = 8,
+    epsilon 1e-10: 1143 steps and 4 retakes instead of a track that goes on)."""
+    sim = scenes.new_simulation()
+    sim.add(m=1.0)
+    scenes._jupiter(sim)
+    sim.add(m=0.0, a=scenes.Retrograde.A, e=0.6, inc=2.5, Omega=1.0, omega=0.0, M=0.0)
+    sim.move_to_com()
+    sim.integrator = "pfvi"
+    sim.integrator.epsilon = 1e-10
+    t_end = 45 * 2 * math.pi * math.sqrt(scenes.Retrograde.A**3 / sim.G)
+    lowest = math.inf
+    while sim.t < t_end:
+        sim.steps(1)
+        lowest = min(lowest, sim.integrator.density_scale)
+    assert sim.integrator.n_rejected > 0  # the scale was raised, so it had to come down
+    assert lowest == 1.0

@@ -533,9 +533,11 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         // Lambda falls back where a whole interval resolved the forces
         // finer than needed (never below 1: the density's own steps).
         if (full && lambda > 1. && u*PFVI_RESOLUTION_SLACK < u_target){
-            const double scale = fmax(1./lambda, PFVI_RESOLUTION_SLACK*u/u_target);
-            lambda *= scale;
-            st->rho *= scale;
+            // Clamped at exactly 1: lambda*(1/lambda) can round below it, and
+            // a lambda below 1 is taken for a damaged one (the track restarts).
+            const double lowered = fmax(1., lambda*fmax(1./lambda, PFVI_RESOLUTION_SLACK*u/u_target));
+            st->rho *= lowered/lambda;
+            lambda = lowered;
             st->track_done = kappa/st->rho;
             asymmetric = 1;
         }
