@@ -218,6 +218,24 @@ def lobatto(s: int) -> Tuple[Any, Any, Any]:
     return np.array(c), np.array(w), np.array(a).reshape(s, s)
 
 
+def nystrom(s: int) -> Tuple[Any, Any, Any]:
+    """The classical (u = 0) s-stage step as the C core takes it: Lobatto
+    IIIA-IIIB in Runge-Kutta-Nystrom form, in units of the weights w.
+
+    Returns numpy arrays ``(c_nu, nu, mu_hat)``: the stage positions are
+    ``Q_i = q + c_nu[i] h v + h**2 sum_j nu[i, j] w[j] A_j``, the stage
+    velocities (for velocity-dependent forces) ``V_i = v + h sum_j mu_hat[i, j]
+    w[j] A_j``. c_nu and nu lie on a grid of 2**-50 on which the identities of
+    symplecticity and symmetry hold exactly in doubles (docs/roundoff.md).
+    """
+    import numpy as np
+
+    s = _check_stages(s)
+    c, nu, mu_hat = (_ctypes.c_double * s)(), (_ctypes.c_double * (s * s))(), (_ctypes.c_double * (s * s))()
+    _lib.pfvi_nystrom_table(s, c, nu, mu_hat)
+    return np.array(c), np.array(nu).reshape(s, s), np.array(mu_hat).reshape(s, s)
+
+
 def stage_coefficients(s: int, u: float) -> Dict[str, Any]:
     """The fitted stage coefficients of the s-stage step at u = omega h.
 

@@ -70,8 +70,9 @@ def test_fixed_step_round_trip_returns_to_start(fitting, frequency):
 def test_stage_solve_round_trip_returns_to_start(stages, fitting, frequency):
     # Lobatto nodes are symmetric, so with a fixed omega the step is a
     # symmetric map; the solve is converged to round-off (stopped once the
-    # change is below 3e-17). 10 orbits at e = 0.5, 100 steps per orbit, and
-    # back: measured 5.5e-14 to 1.1e-12.
+    # change stops falling). 10 orbits at e = 0.5, 100 steps per orbit, and
+    # back: measured 5.5e-14 to 1.1e-12 (before the classical form of
+    # docs/roundoff.md).
     sim = two_body(1e-3, e=0.5, com=True)
     fixed_step_pfvi(sim)
     sim.integrator.stages = stages

@@ -105,9 +105,6 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // decreases, and has converged if that change is at most the tolerance.
 #define PFVI_ITERATION_MAX 50
 #define PFVI_ITERATION_TOLERANCE 1e-12
-// A change at most this (relative, below the doubles' spacing) ends the
-// iteration at once, converged.
-#define PFVI_ITERATION_ROUNDOFF 3e-17
 // Step control. Standard controller: next h = h * SAFETY * (epsilon/error)^(1/ORDER),
 // the factor kept within [SHRINK_MIN, GROW_MAX]; ORDER is the measured order
 // in h of the osculating-circle estimate (docs/adaptive.md).
@@ -202,6 +199,21 @@ struct pfvi_lobatto {
     double w[PFVI_STAGES_MAX];
     double a[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
     double lagrange[PFVI_STAGES_MAX]; // barycentric weights 1/prod_(m != j) (c^j - c^m): l_j(t) = lagrange[j] prod_(m != j) (t - c^m)
+    // The classical step (u = 0) as the Runge-Kutta-Nystrom method it is
+    // (Lobatto IIIA-IIIB: the classical discrete Lagrangian), with stage
+    // positions Q^i = q_k + c_nu[i] h v_k + h sum_j nu[i][j] (h w_j) A^j.
+    // nu = abar/w (abar = IIIA IIIB) in units of the weights, as IRKGL16
+    // stores Gauss's; c_nu and nu are multiples of 2^-50, rounded so that
+    // the identities the method's symplecticity (nu[i][j] - nu[j][i] =
+    // c_nu[i] - c_nu[j], nu[s-1][j] = 1 - c_nu[j]) and symmetry (c_nu[s-1-i]
+    // = 1 - c_nu[i], nu[s-1-i][s-1-j] = nu[i][j] + c_nu[j] - c_nu[i]) rest
+    // on hold exactly in doubles: the map the doubles define is symplectic
+    // and symmetric, so round-off cannot make it drift (docs/roundoff.md).
+    // mu_hat (IIIB over the weights) gives the stage velocities V^i = v_k +
+    // sum_j mu_hat[i][j] (h w_j) A^j for forces that depend on velocities.
+    double c_nu[PFVI_STAGES_MAX];
+    double nu[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
+    double mu_hat[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
     double det_classical;   // determinant of the stage matrix at u = 0 (singularity guard), set by pfvi_fitting.c
 };
 PFVI_INTERNAL int pfvi_lobatto_compute(int s, struct pfvi_lobatto* rule);
@@ -232,6 +244,9 @@ struct pfvi_two_point_fit {
 // in the unknowns (q_k+1 - q_k, delta q^2, ..., delta q^s-1).
 struct pfvi_stage_fit {
     double omega;
+    // 1 at u = 0: the step is taken in the rule's Runge-Kutta-Nystrom form
+    // (struct pfvi_lobatto, nu), not through the stage matrix below.
+    int classical;
     double G;                         // -D1 Ld_printed = G p_k: gamma_s(u) for "phase" and "exact", else 1
     double u2;                        // "exact": u^2, the harmonic part solved with the linear part; else 0
     // The differentiation matrix of the interpolation, a[k][l] = psi_l'(c^k):
@@ -280,6 +295,8 @@ PFVI_API void pfvi_seed_coefficients(double u, double c, double out[4]);
 PFVI_API double pfvi_gamma(double u);
 PFVI_API int pfvi_two_point_coefficients(double omega, double h, double u_max, int literal, double out[6]);
 PFVI_API int pfvi_lobatto_table(int s, double* c, double* w, double* a);
+// The classical form's c_nu (s), nu (s x s) and mu_hat (s x s), row by row.
+PFVI_API int pfvi_nystrom_table(int s, double* c_nu, double* nu, double* mu_hat);
 PFVI_API int pfvi_stage_coefficients(int s, double u, double* out);
 // The differentiation matrix (s x s, row-major) of fitting `fitting` at u.
 PFVI_API int pfvi_stage_differentiation(int s, double u, int fitting, double* out);
@@ -328,6 +345,7 @@ PFVI_INTERNAL double pfvi_osculating_error(const double x0[3], const struct pfvi
 // that do not depend on the unknowns.
 struct pfvi_stage_start {
     double q0[3];
+    double v0[3];                        // the start velocity (the classical form's)
     double d0[3];                        // q0 - centre
     double yc[PFVI_STAGES_MAX-1][3];     // L^-1 g: the unknowns if no force acted (zero beyond s - 1)
     double base[PFVI_STAGES_MAX][3];     // beta_m^k d0 (interior k)
@@ -624,6 +642,9 @@ struct pfvi_state {
     double (*predictor_x)[PFVI_STAGES_MAX][3];
     double (*unknowns)[PFVI_STAGES_MAX-1][3];
     double (*unknowns_next)[PFVI_STAGES_MAX-1][3];
+    // The classical form's stage velocities V^k, for forces that depend on
+    // velocities.
+    double (*velocities)[PFVI_STAGES_MAX][3];
     // What each round of a step reuses, per particle (pfvi_stages.c).
     struct pfvi_stage_start* stage_start;
     // The last step's stage accelerations seed the next solve if it starts

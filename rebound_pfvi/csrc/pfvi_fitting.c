@@ -199,6 +199,7 @@ void pfvi_stage_fit_at(const struct pfvi_lobatto* rule, double u, int fitting, s
     const int s = rule->s;
     const int phase = (fitting == PFVI_FITTING_PHASE || fitting == PFVI_FITTING_EXACT);
     memcpy(fit->a, rule->a, sizeof(fit->a));
+    fit->classical = (u == 0.);
     if (u == 0.){
         for (int k=0; k<s; k++){
             fit->b[k] = 1. - rule->c[k]; fit->bbar[k] = rule->c[k];
@@ -390,6 +391,21 @@ int pfvi_lobatto_table(int s, double* c, double* w, double* a){
         w[k] = rule.w[k];
         for (int j=0; j<s; j++){
             a[k*s + j] = rule.a[k][j];
+        }
+    }
+    return 1;
+}
+
+int pfvi_nystrom_table(int s, double* c_nu, double* nu, double* mu_hat){
+    struct pfvi_lobatto rule;
+    if (!pfvi_lobatto_compute(s, &rule)){
+        return 0;
+    }
+    for (int i=0; i<s; i++){
+        c_nu[i] = rule.c_nu[i];
+        for (int j=0; j<s; j++){
+            nu[i*s + j] = rule.nu[i][j];
+            mu_hat[i*s + j] = rule.mu_hat[i][j];
         }
     }
     return 1;

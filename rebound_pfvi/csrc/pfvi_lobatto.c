@@ -4,6 +4,7 @@
  * Gauss-Lobatto nodes and weights on [0, 1] and the differentiation matrix
  * of the polynomial through the nodes. Nothing here knows of fitting.
  */
+#include <float.h>
 #include <math.h>
 #include <string.h>
 #include "pfvi.h"
@@ -22,6 +23,91 @@ static void legendre(int n, long double x, long double* p, long double* dp){
     }
     *p = p1;
     *dp = n*(p0 - x*p1)/(1.L - x*x);
+}
+
+// The grid every coefficient of the classical form lies on: multiples of
+// 2^-50, so that sums and differences of coefficients below 8 in size (the
+// identities of struct pfvi_lobatto) are exact in doubles. Rounding the
+// nodes c and the matrix nu to it perturbs them by at most 4.4e-16: a
+// symplectic symmetric method just as close to the rule's, far below any
+// truncation error pfvi's epsilon floors allow.
+static long double on_grid(long double value){
+    const long double quantum = ldexpl(1.L, -50);
+    return roundl(value/quantum)*quantum;
+}
+
+// The classical step's Runge-Kutta-Nystrom form (pfvi.h, struct
+// pfvi_lobatto). In long double: a_ij = int_0^c_i l_j by Gauss-Legendre
+// quadrature (exact for l_j's degree s - 1), the IIIB matrix ahat_jk =
+// w_k (1 - a_kj/w_j), abar = a ahat. Then on the grid: c (c_s-1-i = 1 - c_i),
+// and nu = abar/w, one index pair of each set {(i,j), (j,i), (s-1-i,s-1-j),
+// (s-1-j,s-1-i)} from the quadrature and the others from the identities.
+static void nystrom_form(int s, const long double* x, struct pfvi_lobatto* rule){
+    enum { GAUSS = PFVI_STAGES_MAX/2 + 1 };
+    long double xi[GAUSS], weight[GAUSS];
+    for (int g=0; g<GAUSS; g++){
+        long double root = cosl(M_PI*(g + 0.75L)/(GAUSS + 0.5L)), p, dp;
+        for (int it=0; it<100; it++){
+            legendre(GAUSS, root, &p, &dp);
+            const long double dx = p/dp;
+            root -= dx;
+            if (fabsl(dx) <= 1e-19L) break;
+        }
+        legendre(GAUSS, root, &p, &dp);
+        xi[g] = root;
+        weight[g] = 2.L/((1.L - root*root)*dp*dp);
+    }
+    const int n = s - 1;
+    long double c[PFVI_STAGES_MAX], w[PFVI_STAGES_MAX];
+    long double a[PFVI_STAGES_MAX][PFVI_STAGES_MAX], ahat[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
+    for (int j=0; j<=n; j++){
+        long double p, dp;
+        legendre(n, x[j], &p, &dp);
+        c[j] = 0.5L*(1.L + x[j]);
+        w[j] = 1.L/(n*(n + 1)*p*p);
+    }
+    for (int i=0; i<s; i++){
+        for (int j=0; j<s; j++){
+            long double integral = 0.L;
+            for (int g=0; g<GAUSS; g++){
+                const long double t = 0.5L*c[i]*(1.L + xi[g]);
+                long double l = 1.L;
+                for (int m=0; m<s; m++){
+                    if (m != j) l *= (t - c[m])/(c[j] - c[m]);
+                }
+                integral += weight[g]*l;
+            }
+            a[i][j] = 0.5L*c[i]*integral;
+        }
+    }
+    for (int i=0; i<s; i++){
+        for (int j=0; j<s; j++){
+            ahat[i][j] = w[j]*(1.L - a[j][i]/w[i]);
+            rule->mu_hat[i][j] = (double)(ahat[i][j]/w[j]);
+        }
+    }
+    for (int i=0; i<=n; i++){
+        rule->c_nu[i] = (2*i < n) ? (double)on_grid(c[i]) : (2*i == n) ? 0.5 : 1. - rule->c_nu[n-i];
+    }
+    for (int i=0; i<s; i++){
+        for (int j=0; j<s; j++){
+            const int mi = n - i, mj = n - j;
+            const int index = i*s + j;
+            if (index > j*s + i || index > mi*s + mj || index > mj*s + mi){
+                continue;  // not the set's first pair: set from it below
+            }
+            long double abar = 0.L;
+            for (int k=0; k<s; k++){
+                abar += a[i][k]*ahat[k][j];
+            }
+            const double nu = (double)on_grid(abar/w[j]);
+            const double* const cn = rule->c_nu;
+            rule->nu[i][j] = nu;
+            rule->nu[j][i] = nu - cn[i] + cn[j];
+            rule->nu[mi][mj] = nu + cn[j] - cn[i];
+            rule->nu[mj][mi] = nu;
+        }
+    }
 }
 
 int pfvi_lobatto_compute(int s, struct pfvi_lobatto* rule){
@@ -78,5 +164,6 @@ int pfvi_lobatto_compute(int s, struct pfvi_lobatto* rule){
         }
         rule->a[k][k] = (double)diagonal;
     }
+    nystrom_form(s, x, rule);
     return 1;
 }

@@ -34,6 +34,12 @@ static void stage_start_of(const struct pfvi_lobatto* rule, const struct pfvi_st
         const struct reb_particle* p0, const struct pfvi_centre* centre, double h, struct pfvi_stage_start* ss){
     const int s = rule->s, m = s - 1;
     const double q0[3] = {p0->x, p0->y, p0->z};
+    ss->v0[0] = p0->vx; ss->v0[1] = p0->vy; ss->v0[2] = p0->vz;
+    if (f->classical){
+        // The classical form needs the start only (it knows no centre).
+        ss->q0[0] = q0[0]; ss->q0[1] = q0[1]; ss->q0[2] = q0[2];
+        return;
+    }
     const double v0[3] = {p0->vx - centre->v[0], p0->vy - centre->v[1], p0->vz - centre->v[2]};
     for (int c=0; c<3; c++){
         ss->q0[c] = q0[c];
@@ -88,6 +94,58 @@ static inline __attribute__((always_inline)) void stage_round_n(const struct pfv
     }
 }
 
+// One round of the classical form for one particle (the rule's Runge-Kutta-
+// Nystrom form of Lobatto IIIA-IIIB, pfvi.h): with hb_j = h w_j and the
+// stage accelerations A^j the iteration carries, the unknowns
+//     y[i-1] = Q^i - q_k = c_nu[i] h v_k + h sum_j nu[i][j] hb_j A^j
+// (i = 1 .. s-1; y[s-2] = q_k+1 - q_k). The last column of nu is zero: the
+// end force A^s does not act within the step it ends.
+static inline __attribute__((always_inline)) void classical_round_n(const struct pfvi_lobatto* rule,
+        const struct pfvi_stage_start* ss, double h, const double* hb, const double (*sa)[3], double (*y)[3],
+        const int s){
+    for (int c=0; c<3; c++){
+        double hbA[PFVI_STAGES_MAX];
+        for (int j=0; j<s-1; j++){
+            hbA[j] = hb[j]*sa[j][c];
+        }
+        const double hv = h*ss->v0[c];
+        for (int i=1; i<s; i++){
+            double sum = 0.;
+            for (int j=0; j<s-1; j++){
+                sum += rule->nu[i][j]*hbA[j];
+            }
+            y[i-1][c] = rule->c_nu[i]*hv + h*sum;
+        }
+    }
+}
+
+static void classical_round(const struct pfvi_lobatto* rule, const struct pfvi_stage_start* ss, double h,
+        const double* hb, const double (*sa)[3], double (*y)[3]){
+    switch (rule->s){
+        case 3: classical_round_n(rule, ss, h, hb, sa, y, 3); break;
+        case 4: classical_round_n(rule, ss, h, hb, sa, y, 4); break;
+        case 5: classical_round_n(rule, ss, h, hb, sa, y, 5); break;
+        case 6: classical_round_n(rule, ss, h, hb, sa, y, 6); break;
+        case 7: classical_round_n(rule, ss, h, hb, sa, y, 7); break;
+        default: classical_round_n(rule, ss, h, hb, sa, y, PFVI_STAGES_MAX); break;
+    }
+}
+
+// The classical form's stage velocities (IIIB) for the accelerations sa.
+static void classical_velocities(const struct pfvi_lobatto* rule, const struct pfvi_stage_start* ss,
+        const double* hb, const double (*sa)[3], double (*V)[3]){
+    const int s = rule->s;
+    for (int k=0; k<s; k++){
+        for (int c=0; c<3; c++){
+            double sum = 0.;
+            for (int j=0; j<s-1; j++){
+                sum += rule->mu_hat[k][j]*(hb[j]*sa[j][c]);
+            }
+            V[k][c] = ss->v0[c] + sum;
+        }
+    }
+}
+
 // One case per s from 3 to PFVI_STAGES_MAX.
 typedef char pfvi_stage_round_has_a_case_per_s[(PFVI_STAGES_MAX == 8) ? 1 : -1];
 
@@ -106,8 +164,9 @@ static void stage_round(const struct pfvi_stage_fit* f, const struct pfvi_stage_
 
 // The step's position increment q_k+1 - q_k of one component: the change
 // of d = q - c and the centre's drift.
-static inline double stage_increment(const struct pfvi_stage_start* ss, const double (*y)[3], int s, int c){
-    return y[0][c] + ss->shift[s-1][c];
+static inline double stage_increment(const struct pfvi_stage_fit* f, const struct pfvi_stage_start* ss,
+        const double (*y)[3], int s, int c){
+    return f->classical ? y[s-2][c] : y[0][c] + ss->shift[s-1][c];
 }
 
 // Stage point k of one particle: q_k + (beta_m d_k + bbar (d_k+1 - d_k)
@@ -119,7 +178,9 @@ static inline void stage_position(const struct pfvi_stage_fit* f, const struct p
         if (k == 0){
             x[c] = ss->q0[c];
         }else if (k == s - 1){
-            x[c] = ss->q0[c] + (stage_increment(ss, y, s, c) + comp->x[c]);
+            x[c] = ss->q0[c] + (stage_increment(f, ss, y, s, c) + comp->x[c]);
+        }else if (f->classical){
+            x[c] = ss->q0[c] + y[k-1][c];
         }else{
             x[c] = ss->q0[c] + ((ss->base[k][c] + f->bbar[k]*y[0][c] + y[k][c]) + ss->shift[k][c]);
         }
@@ -146,6 +207,20 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
     const int s = rule->s;
     const int vdep = r->force_is_velocity_dependent;
     struct reb_particle* const ps = r->particles;
+    if (vdep){
+        // The stage velocities of the current iterate, from the forces that
+        // made it (stage_a, overwritten below).
+        double hb[PFVI_STAGES_MAX];
+        for (int j=0; j<s; j++){
+            hb[j] = h*rule->w[j];
+        }
+        for (size_t i=0; i<N; i++){
+            if (st->stage_fit[i].classical){
+                classical_velocities(rule, &st->stage_start[i], hb, (const double (*)[3])st->stage_a[i],
+                        st->velocities[i]);
+            }
+        }
+    }
     for (int k=vdep ? 0 : 1; k<s; k++){
         for (size_t i=0; i<N; i++){
             double x[3];
@@ -153,7 +228,11 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
             stage_position(&st->stage_fit[i], &st->stage_start[i], &st->compensation[i],
                     (const double (*)[3])st->unknowns[i], s, k, x);
             ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
-            if (vdep){
+            if (vdep && st->stage_fit[i].classical){
+                ps[i].vx = st->velocities[i][k][0];
+                ps[i].vy = st->velocities[i][k][1];
+                ps[i].vz = st->velocities[i][k][2];
+            }else if (vdep){
                 double qd[3];
                 stage_velocity_times_h(&st->stage_fit[i], &st->stage_start[i], (const double (*)[3])st->unknowns[i],
                         s, k, qd);
@@ -291,6 +370,12 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
         stage_start_of(rule, &st->stage_fit[i], &p0[i], &st->centre[i], h, &st->stage_start[i]);
     }
     stage_predict(st, N, t0, h);
+    // The classical form's h w_j: the same products in every round and in
+    // the update, so that the doubles' step is the IIIA-IIIB pair exactly.
+    double hb[PFVI_STAGES_MAX];
+    for (int j=0; j<s; j++){
+        hb[j] = h*rule->w[j];
+    }
 
     // Fixed-point iteration; `unknowns` is the iterate at which the forces
     // in stage_a were evaluated (after the first round).
@@ -298,8 +383,13 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
     int rounds = 0, converged = 0;
     for (int iteration=0; iteration<=PFVI_ITERATION_MAX; iteration++){
         for (size_t i=0; i<N; i++){
-            stage_round(&st->stage_fit[i], &st->stage_start[i], &st->centre[i], s, h,
-                    (const double (*)[3])st->stage_a[i], (const double (*)[3])st->stage_x[i], st->unknowns_next[i]);
+            if (st->stage_fit[i].classical){
+                classical_round(rule, &st->stage_start[i], h, hb, (const double (*)[3])st->stage_a[i],
+                        st->unknowns_next[i]);
+            }else{
+                stage_round(&st->stage_fit[i], &st->stage_start[i], &st->centre[i], s, h,
+                        (const double (*)[3])st->stage_a[i], (const double (*)[3])st->stage_x[i], st->unknowns_next[i]);
+            }
         }
         if (iteration > 0){
             change = 0.;
@@ -307,8 +397,9 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
                 const double (*y)[3] = st->unknowns[i];
                 const double (*yn)[3] = st->unknowns_next[i];
                 double scale = 0., diff = 0.;
+                const int increment = st->stage_fit[i].classical ? s - 2 : 0;
                 for (int c=0; c<3; c++){
-                    const double q = fabs(st->stage_start[i].q0[c]), d = fabs(y[0][c]);
+                    const double q = fabs(st->stage_start[i].q0[c]), d = fabs(y[increment][c]);
                     scale = (q > scale) ? q : scale;
                     scale = (d > scale) ? d : scale;
                 }
@@ -357,34 +448,46 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
         const struct pfvi_stage_fit* const f = &st->stage_fit[i];
         struct pfvi_compensation* const comp = &st->compensation[i];
         const double (*y)[3] = st->unknowns[i];
-        double dv[3] = {0., 0., 0.};
-        const struct pfvi_centre* const centre = &st->centre[i];
-        const double* const d0 = st->stage_start[i].d0;
-        for (int k=0; k<s; k++){
-            double qd[3];
-            stage_velocity_times_h(f, &st->stage_start[i], y, s, k, qd);
-            const double wk = rule->w[k], wf = h2*(1. + f->beta_m[k]);
+        double x[3], inc_v[3];
+        stage_position(f, &st->stage_start[i], comp, y, s, s - 1, x);
+        if (f->classical){
+            // p_k+1 = p_k + sum_j hb_j A^j (IIIB).
             for (int c=0; c<3; c++){
-                if (f->u2 == 0.){
-                    dv[c] += wk*(f->beta_d[k]*qd[c] + wf*(st->stage_a[i][k][c] - centre->acc[c]));
-                }else{
-                    // The harmonic part at the solved stage point, the
-                    // residual where it was evaluated: as the solve used them.
-                    const double d = (k == 0) ? d0[c] : (k == s - 1) ? d0[c] + y[0][c]
-                        : (1. + f->beta_m[k])*d0[c] + f->bbar[k]*y[0][c] + y[k][c];
-                    const double h2a = stage_force_h2(f, &st->stage_start[i], centre, h, (const double (*)[3])st->stage_a[i],
-                            (const double (*)[3])st->stage_x[i], k, c) - f->u2*d;
-                    dv[c] += wk*(f->beta_d[k]*qd[c] + (1. + f->beta_m[k])*h2a);
+                double sum = 0.;
+                for (int j=0; j<s; j++){
+                    sum += hb[j]*st->stage_a[i][j][c];
+                }
+                inc_v[c] = sum + comp->v[c];
+            }
+        }else{
+            double dv[3] = {0., 0., 0.};
+            const struct pfvi_centre* const centre = &st->centre[i];
+            const double* const d0 = st->stage_start[i].d0;
+            for (int k=0; k<s; k++){
+                double qd[3];
+                stage_velocity_times_h(f, &st->stage_start[i], y, s, k, qd);
+                const double wk = rule->w[k], wf = h2*(1. + f->beta_m[k]);
+                for (int c=0; c<3; c++){
+                    if (f->u2 == 0.){
+                        dv[c] += wk*(f->beta_d[k]*qd[c] + wf*(st->stage_a[i][k][c] - centre->acc[c]));
+                    }else{
+                        // The harmonic part at the solved stage point, the
+                        // residual where it was evaluated: as the solve used them.
+                        const double d = (k == 0) ? d0[c] : (k == s - 1) ? d0[c] + y[0][c]
+                            : (1. + f->beta_m[k])*d0[c] + f->bbar[k]*y[0][c] + y[k][c];
+                        const double h2a = stage_force_h2(f, &st->stage_start[i], centre, h,
+                                (const double (*)[3])st->stage_a[i], (const double (*)[3])st->stage_x[i], k, c) - f->u2*d;
+                        dv[c] += wk*(f->beta_d[k]*qd[c] + (1. + f->beta_m[k])*h2a);
+                    }
                 }
             }
+            // w_k+1 - w_k, and the centre's velocity change h ac.
+            const double gh = f->G*h;
+            for (int c=0; c<3; c++){
+                inc_v[c] = (dv[c]/gh + h*centre->acc[c]) + comp->v[c];
+            }
         }
-        const double gh = f->G*h;
-        double x[3];
-        stage_position(f, &st->stage_start[i], comp, y, s, s - 1, x);
         ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
-        // w_k+1 - w_k, and the centre's velocity change h ac.
-        const double inc_v[3] = {(dv[0]/gh + h*centre->acc[0]) + comp->v[0], (dv[1]/gh + h*centre->acc[1]) + comp->v[1],
-            (dv[2]/gh + h*centre->acc[2]) + comp->v[2]};
         ps[i].vx = p0[i].vx + inc_v[0];
         ps[i].vy = p0[i].vy + inc_v[1];
         ps[i].vz = p0[i].vz + inc_v[2];
@@ -408,9 +511,10 @@ static void stages_commit(struct reb_simulation* r, struct pfvi_state* st, size_
         const double (*y)[3] = st->unknowns[i];
         const struct pfvi_stage_start* const ss = &st->stage_start[i];
         const int s = st->rule.s;
-        comp->x[0] = (stage_increment(ss, y, s, 0) + comp->x[0]) - (ps[i].x - p0[i].x);
-        comp->x[1] = (stage_increment(ss, y, s, 1) + comp->x[1]) - (ps[i].y - p0[i].y);
-        comp->x[2] = (stage_increment(ss, y, s, 2) + comp->x[2]) - (ps[i].z - p0[i].z);
+        const struct pfvi_stage_fit* const f = &st->stage_fit[i];
+        comp->x[0] = (stage_increment(f, ss, y, s, 0) + comp->x[0]) - (ps[i].x - p0[i].x);
+        comp->x[1] = (stage_increment(f, ss, y, s, 1) + comp->x[1]) - (ps[i].y - p0[i].y);
+        comp->x[2] = (stage_increment(f, ss, y, s, 2) + comp->x[2]) - (ps[i].z - p0[i].z);
         comp->v[0] = st->dv[i].x - (ps[i].vx - p0[i].vx);
         comp->v[1] = st->dv[i].y - (ps[i].vy - p0[i].vy);
         comp->v[2] = st->dv[i].z - (ps[i].vz - p0[i].vz);
