@@ -134,8 +134,10 @@ def test_a_step_into_a_close_approach_is_retried_shorter(s):
     # step, which the symmetric track cannot foresee. Without the checks at
     # the step's end the default s = 6 took 191 steps and ended with an
     # energy error of 339 (2.4 in the stability report), silently; with
-    # them, 520 steps and 1.2e-8 (s = 6), 1 retried (s = 4, 6, 8: 1 to 2;
-    # s = 4 then takes 8 more asymmetric steps while lambda falls back).
+    # them, 545 steps and 2.0e-8 (s = 6), 3 to 4 retried (s = 4, 6, 8).
+    # The close approaches also move the track off the density, which the
+    # track's drift correction takes out: 76, 32 and 26 asymmetric steps of
+    # 2622, 545 and 332 (s = 4, 6, 8; 3, 2 and 1 before the correction).
     sim = rebound.Simulation()
     for m, x, y in ((3.0, 1.0, 3.0), (4.0, -2.0, -1.0), (5.0, 1.0, -1.0)):
         sim.add(m=m, x=x, y=y)
@@ -145,8 +147,9 @@ def test_a_step_into_a_close_approach_is_retried_shorter(s):
     sim.integrate(20.0)
     assert abs(sim.energy() / E0 - 1) < 1e-6
     # Every retried step is asymmetric; so are the steps after which lambda
-    # falls back (no retry): a few in all.
-    assert 0 < sim.integrator.n_rejected <= sim.integrator.n_asymmetric < 20
+    # falls back (no retry) and the track's corrections: under a tenth.
+    assert 0 < sim.integrator.n_rejected <= 5
+    assert sim.integrator.n_rejected <= sim.integrator.n_asymmetric < 0.1 * sim.steps_done
 
 
 @pytest.mark.parametrize("e", [0.9, 0.99, 0.9999])

@@ -425,6 +425,9 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         return h;
     }
     symmetric_discard_implausible(st, sigma0);
+    if (!symmetric_on_track(st, kappa)){
+        st->track_mismatch = 0.;  // a fresh track starts its average afresh
+    }
     struct track_position t = symmetric_position(st, sign, kappa, sigma0, g0);
     const double dt = fabs(r->dt);
     const int uncapped = (symmetric_on_track(st, kappa) && (dt == fabs(st->dt_proposed) || dt == fabs(st->dt_last_full)))
@@ -524,6 +527,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     const int full = (step == t.remaining);
     if (restart){
         st->rho = 0.;
+        st->track_mismatch = 0.;
     }else{
         st->rho = t.rho;
         st->rho_sign = sign;
@@ -540,6 +544,18 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
             lambda = lowered;
             st->track_done = kappa/st->rho;
             asymmetric = 1;
+        }
+        if (full && t.done == 0. && !shortened && sigma0 > 0. && sigma1 > 0.){
+            // The interval's mismatch, averaged; a drift of the average is
+            // taken out of rho (pfvi.h, PFVI_TRACK_MISMATCH_MAX).
+            const double m = log(t.rho/(lambda*sqrt(sigma0)*sqrt(sigma1)));
+            st->track_mismatch += PFVI_TRACK_MISMATCH_WEIGHT*(m - st->track_mismatch);
+            if (fabs(st->track_mismatch) > PFVI_TRACK_MISMATCH_MAX){
+                st->rho *= exp(-st->track_mismatch);
+                st->track_done = kappa/st->rho;
+                st->track_mismatch = 0.;
+                asymmetric = 1;
+            }
         }
     }
     st->density_scale = lambda;

@@ -217,6 +217,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "dt_proposed", offsetof(struct pfvi_state, dt_proposed), 0, 0, 0 },
     { "", REB_DOUBLE, "track_done", offsetof(struct pfvi_state, track_done), 0, 0, 0 },
     { "", REB_INT, "track_at_end", offsetof(struct pfvi_state, track_at_end), 0, 0, 0 },
+    { "", REB_DOUBLE, "track_mismatch", offsetof(struct pfvi_state, track_mismatch), 0, 0, 0 },
     { "", REB_DOUBLE, "track_kappa", offsetof(struct pfvi_state, track_kappa), 0, 0, 0 },
     { "", REB_DOUBLE, "density_scale", offsetof(struct pfvi_state, density_scale), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_last_full", offsetof(struct pfvi_state, dt_last_full), 0, 0, 0 },

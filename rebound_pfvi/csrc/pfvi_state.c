@@ -339,6 +339,9 @@ void pfvi_discard_implausible(const struct reb_simulation* r, struct pfvi_state*
     if (!(st->density_scale >= 1. && st->density_scale <= PFVI_DENSITY_SCALE_MAX)){
         st->density_scale = 1.;
     }
+    if (!(fabs(st->track_mismatch) <= PFVI_TRACK_MISMATCH_MAX)){
+        st->track_mismatch = 0.;
+    }
     if (!(fabs(st->t_compensation) <= 1e-9*fmax(1., fabs(r->t)))){
         st->t_compensation = 0.;
     }
