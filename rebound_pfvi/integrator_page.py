@@ -25,8 +25,10 @@ WHEN = """\
   do not hold).
 - **Time-symmetric runs**: the default step control reads the same forward
   and backward; integrating forward and back retraces the steps.
-- **Not** for: variational particles (MEGNO, Lyapunov exponents; refused
-  with an error), collisions (not detected inside a step; use IAS15 or
+- **MEGNO and Lyapunov maps**, above all of eccentric systems: variational
+  particles follow the tangent map of pfvi's own step (docs/megno.md has
+  the map against IAS15 and WHFast).
+- **Not** for: collisions (not detected inside a step; use IAS15 or
   MERCURIUS/TRACE), planetary systems at moderate accuracy (WHFast, with
   its corrector, is faster at 1e-6), very short accurate runs (BS is often
   faster), and forces that jump within a step (a tree code's cells: the

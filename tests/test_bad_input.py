@@ -141,10 +141,21 @@ def test_singularity_of_the_four_stage_coefficients_is_refused():
     assert_refused(sim, r"particle 0: u = omega\*dt = 2\.8572 is within 0\.001 of a singularity of the 4-stage")
 
 
-def test_variational_particles_are_refused(stages):
+def test_variational_particles_are_refused_where_rebound_has_no_variational_forces(stages):
+    # Variational particles are integrated (tests/test_variational.py); what
+    # remains refused: gravity modes without REBOUND's variational forces, and
+    # velocity-dependent forces. The variational particles are restored too.
     sim = pfvi_sim(stages)
-    sim.add_variation()
-    assert_refused(sim, r"variational particles \(N_var = 3\) are not supported")
+    var = sim.add_variation()
+    var.particles[1].x = 1.0
+    sim.gravity = "compensated"
+    var_before = [(p.x, p.vx) for p in var.particles]
+    assert_refused(sim, r"variational particles \(N_var = 3\) need sim.gravity = 'basic'")
+    assert [(p.x, p.vx) for p in var.particles] == var_before
+    sim.gravity = "basic"
+    sim.force_is_velocity_dependent = 1
+    assert_refused(sim, r"variational particles \(N_var = 3\) with velocity-dependent forces "
+                   r"\(sim.force_is_velocity_dependent = 1\) are not supported")
 
 
 def test_a_refused_step_can_be_retried_after_fixing_the_input():

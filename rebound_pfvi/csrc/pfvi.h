@@ -492,12 +492,19 @@ struct pfvi_statistics {
     uint64_t n_asymmetric;
     uint64_t n_unresolved;         // symmetric steps whose forces no shorter step resolved better
     double error_estimate;         // the step control's estimate for the last step taken
+    uint64_t n_variational_evaluations; // force evaluations for the variational particles alone (their
+                                   // tangent solve going on after the real one converged)
+    uint64_t n_variational_unconverged; // steps whose tangent solve stopped short of round-off
 };
 
 // What a trial step found, committed only if the step is taken.
 struct pfvi_trial_record {
     uint64_t n_limited;
     uint64_t rounds;
+    uint64_t variational_evaluations; // force evaluations for the variational particles alone
+    int variational_unconverged;   // their tangent solve stopped short of round-off
+    double megno_dY;               // the step's increment of MEGNO's 2 int (t - t_0) delta.delta'/|delta|^2 dt
+    double megno_Y_integral;       // int Y dt over the step (Y = that integral / (t - t_0)), for <Y>
     double change;                 // the stage solve's last relative change
     double omega_min;
     double omega_max;
@@ -708,6 +715,33 @@ struct pfvi_state {
     int status_at_start;
     double dt_at_start;
     size_t step_N;
+    // Variational particles (REBOUND's r->particles_var, first and second
+    // order): each is stepped by the tangent map of its real particle's
+    // step (pfvi_stages.c, pfvi_two_point.c): the same fit, centre and omega frozen at
+    // the real step's (their tangent is zero), its forces REBOUND's
+    // variational accelerations at its tangent stage points, evaluated in
+    // the same calls as the real forces. They never change the real
+    // particles' step, nor any check or step size.
+    size_t var_N;                  // r->N_var of the step being taken (0: none)
+    size_t var_allocated;
+    size_t* var_real;              // the real particle whose fit each one's tangent step uses
+    struct reb_particle* var_start;// bit-exact copy at the step's start (rollback)
+    struct pfvi_end_state* var_end;// as the last step left them, with their accelerations (force reuse)
+    size_t var_end_N;              // >0: var_end holds them
+    double (*var_stage_a)[PFVI_STAGES_MAX][3];
+    double (*var_predictor_a)[PFVI_STAGES_MAX][3];
+    double (*var_stage_x)[PFVI_STAGES_MAX][3];
+    double (*var_predictor_x)[PFVI_STAGES_MAX][3];
+    double (*var_unknowns)[PFVI_STAGES_MAX-1][3];
+    double (*var_unknowns_next)[PFVI_STAGES_MAX-1][3];
+    struct pfvi_stage_start* var_stage_start;
+    struct reb_vec3d* var_dv;      // the two-point step's velocity increment before the final kick
+    size_t var_predictor_N;        // >0: var_predictor_* are the stages of the step predictor_* describe (saved)
+    int var_retry_valid;           // var_stage_* hold the last trial's (a retry of the same step)
+    // MEGNO's stage velocities: w_k = w_0 + h sum_j collocation[k][j] a_j,
+    // collocation[k][j] the integral of l_j from 0 to c^k (Lobatto IIIA), for s = collocation_s.
+    double collocation[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
+    int collocation_s;
     size_t* origin;
     size_t origin_N;
     size_t origin_allocated;
@@ -758,6 +792,26 @@ PFVI_INTERNAL void pfvi_track_removed(struct pfvi_state* st, size_t index);
 // The iteration rule shared by every fixed-point iteration.
 enum pfvi_iteration { PFVI_ITERATE = 0, PFVI_CONVERGED = 1, PFVI_FAILED = -1 };
 PFVI_INTERNAL enum pfvi_iteration pfvi_iteration_verdict(double change, double previous, int last_round);
+// Scratch for the n variational particles (grows only with n); 0 (fault recorded) if memory ran out.
+PFVI_INTERNAL int pfvi_var_scratch(struct pfvi_state* st, size_t n);
+// Each variational particle's real particle (var_real), from REBOUND's
+// configurations; 0 if they do not describe r->N_var particles of r->N.
+PFVI_INTERNAL int pfvi_var_map(const struct reb_simulation* r, struct pfvi_state* st);
+// Whether the variational particles are, bit for bit, those the last step left.
+PFVI_INTERNAL int pfvi_var_is_end(const struct reb_simulation* r, const struct pfvi_state* st);
+PFVI_INTERNAL void pfvi_var_keep_end(const struct reb_simulation* r, struct pfvi_state* st);
+
+// MEGNO's increment over a step from t (relative to megno_initial_t) to
+// t + h: 2 int (t' - t_0) d ln|delta| = 2 [(t + h) L1 - t L0 - int ln|delta| dt'],
+// by parts, L0 and L1 ln|delta| at the step's ends and `integral` the
+// scheme's quadrature of ln|delta| over its stages (docs/megno.md).
+static inline double megno_increment(double t, double h, double L0, double L1, double integral){
+    return 2.*(((t + h)*L1 - t*L0) - integral);
+}
+// Y at a time t after megno_initial_t from the running sum Ys there (0 at t = 0, its limit).
+static inline double megno_Y(double Ys, double t){
+    return (t != 0.) ? Ys/t : 0.;
+}
 
 /* ------------------------------------------------------- schemes and step */
 

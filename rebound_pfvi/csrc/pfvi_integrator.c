@@ -13,6 +13,7 @@
 #include <string.h>
 #include "pfvi.h"
 #include "rebound_internal.h"
+#include "tools.h"
 
 static void pfvi_step(struct reb_simulation* r, void* state);
 static void pfvi_synchronize(struct reb_simulation* r, void* state);
@@ -60,7 +61,14 @@ const struct reb_integrator pfvi_integrator = {
     "integrate() or steps() calls or in a heartbeat act from the next step on, exactly as "
     "a fresh integrate() from that state. Options are checked, by name, when the next step "
     "starts (REBOUND offers no hook on assignment): a bad value makes integrate() raise and "
-    "changes nothing. Derivations and measurements: the docs/ folder of rebound_pfvi's source."
+    "changes nothing. Variational particles (sim.add_variation(), first and second order, of test "
+    "particles, of masses; sim.init_megno(); gravity 'basic', forces of positions alone) are stepped "
+    "by the tangent map of each step: the same stages and fitted coefficients (the centre and omega "
+    "frozen over the step), their forces REBOUND's variational accelerations at their tangent stage "
+    "points, evaluated in the same calls as the real forces; the step sizes and every check come "
+    "from the real particles only, whose trajectory is bit-identical with or without them. MEGNO "
+    "and the Lyapunov exponent go through REBOUND's own update, with each step's integral taken by "
+    "parts over its stages. Derivations and measurements: the docs/ folder of rebound_pfvi's source."
     ,
     .step = pfvi_step,
     .synchronize = pfvi_synchronize,
@@ -211,6 +219,10 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         offsetof(struct pfvi_state, predictor_N), sizeof(*((struct pfvi_state*)0)->predictor_a), 0 },
     { "", REB_POINTER, "stage_positions", offsetof(struct pfvi_state, predictor_x),
         offsetof(struct pfvi_state, predictor_N), sizeof(*((struct pfvi_state*)0)->predictor_x), 0 },
+    { "", REB_POINTER, "variational_stage_accelerations", offsetof(struct pfvi_state, var_predictor_a),
+        offsetof(struct pfvi_state, var_predictor_N), sizeof(*((struct pfvi_state*)0)->var_predictor_a), 0 },
+    { "", REB_POINTER, "variational_stage_positions", offsetof(struct pfvi_state, var_predictor_x),
+        offsetof(struct pfvi_state, var_predictor_N), sizeof(*((struct pfvi_state*)0)->var_predictor_x), 0 },
     { "", REB_DOUBLE, "dt_reversible", offsetof(struct pfvi_state, dt_reversible), 0, 0, 0 },
     { "", REB_DOUBLE, "rho", offsetof(struct pfvi_state, rho), 0, 0, 0 },
     { "", REB_DOUBLE, "rho_sign", offsetof(struct pfvi_state, rho_sign), 0, 0, 0 },
@@ -264,6 +276,14 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "resolving the forces this well makes where Kepler orbits are resolved worst: at most "
         "about epsilon_effective where the density sees every time scale.",
         REB_DOUBLE, error_estimate),
+    PFVI_STATISTIC("force evaluations made for the variational particles alone: the rounds of their tangent "
+        "solve after the real stage solve had converged (included in n_force_evaluations; the real "
+        "particles' steps are the same with or without variational particles).",
+        REB_UINT64, n_variational_evaluations),
+    PFVI_STATISTIC("steps whose tangent solve of the variational particles stopped (changes no longer "
+        "decreasing, or " PFVI_STR(PFVI_ITERATION_MAX) " rounds) above " PFVI_STR(PFVI_ITERATION_TOLERANCE)
+        " (relative); their step is kept, since the real step never depends on them.",
+        REB_UINT64, n_variational_unconverged),
     PFVI_STATISTIC("smallest omega used in the last step (after limiting).",
         REB_DOUBLE, omega_min),
     PFVI_STATISTIC("largest omega used in the last step (after limiting).",
@@ -478,8 +498,15 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_option
         pfvi_error(r, "pfvi: sim.t = %g is not finite.", r->t);
         return 0;
     }
-    if (r->N_var){
-        pfvi_error(r, "pfvi: variational particles (N_var = %zu) are not supported.", r->N_var);
+    if (r->N_var && r->gravity != REB_GRAVITY_BASIC){
+        pfvi_error(r, "pfvi: variational particles (N_var = %zu) need sim.gravity = 'basic', the one mode in "
+                "which REBOUND computes their forces; not supported with gravity mode %d.", r->N_var, (int)r->gravity);
+        return 0;
+    }
+    if (r->N_var && r->force_is_velocity_dependent){
+        pfvi_error(r, "pfvi: variational particles (N_var = %zu) with velocity-dependent forces "
+                "(sim.force_is_velocity_dependent = 1) are not supported; first- and second-order variations "
+                "under forces of positions alone are.", r->N_var);
         return 0;
     }
     return 1;
@@ -543,8 +570,19 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
     // The density the last step found at its end holds here if the state,
     // the force model and the accelerations are that end's, bit for bit.
     int density_holds = st->density_N == N && st->density_stages == st->options.stages && pfvi_state_is_end(r, st);
+    // The variational particles' start forces are reused with the real ones,
+    // if they too are as the last step left them (REBOUND rescales them
+    // between steps once they grow past 1e100); edited, their stages no
+    // longer predict this step's.
+    const int var_reuse = st->var_N && pfvi_var_is_end(r, st);
+    if (st->var_N && st->var_end_N == st->var_N && !var_reuse){
+        st->var_predictor_N = 0;
+    }
     st->cache_N = 0;
     memcpy(st->start, ps, N*sizeof(struct reb_particle));
+    if (st->var_N){
+        memcpy(st->var_start, r->particles_var, st->var_N*sizeof(struct reb_particle));
+    }
     if (!reuse){
         if (!pfvi_update_acceleration(r, st, N, t0)){
             pfvi_report(r, st);
@@ -554,6 +592,17 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
             density_holds &= (e[i].a[0] == ps[i].ax) & (e[i].a[1] == ps[i].ay) & (e[i].a[2] == ps[i].az);
             e[i].a[0] = ps[i].ax; e[i].a[1] = ps[i].ay; e[i].a[2] = ps[i].az;
         }
+    }else if (st->var_N && !var_reuse){
+        // Their forces alone are new (the real ones, recomputed at the same
+        // positions, are kept from the last step as they are without them).
+        if (!pfvi_update_acceleration(r, st, N, t0)){
+            pfvi_report(r, st);
+            return 0;
+        }
+        st->statistics.n_variational_evaluations++;
+    }
+    if (st->var_N && !(reuse && var_reuse)){
+        pfvi_var_keep_end(r, st);  // var_end: the start state and its forces
     }
     const struct reb_particle* const p0 = st->start;
     const struct pfvi_options* const o = &st->options;
@@ -637,6 +686,19 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
         pfvi_report(r, st);
         return;
     }
+    st->var_N = r->N_var;
+    if (st->var_N){
+        if (!pfvi_var_scratch(st, st->var_N)){
+            pfvi_report(r, st);
+            return;
+        }
+        if (!pfvi_var_map(r, st)){
+            pfvi_error(r, "pfvi: the %zu variational configurations do not describe the N_var = %zu variational "
+                    "particles of the N = %zu particles (particles added after a variation?); step not taken.",
+                    r->N_var_config, r->N_var, N);
+            return;
+        }
+    }
     r->gravity_ignore_terms = REB_GRAVITY_IGNORE_TERMS_NONE;
     if (!pfvi_step_start(r, st, N, t0)){
         return;
@@ -658,6 +720,19 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
     stats->n_steps++;
     stats->iterations_mean = (double)stats->n_iterations/(double)stats->n_steps;
     pfvi_keep_end(r, st, N);  // the end of this step is the start of the next
+    if (st->var_N){
+        pfvi_var_keep_end(r, st);
+        if (r->calculate_megno){
+            // MEGNO's sums through REBOUND's own update, as IAS15 and WHFast do,
+            // with the step's increment of 2 int (t - t_0) delta.delta'/|delta|^2 dt.
+            // REBOUND's <Y> adds Y at the step's end times the step (a
+            // rectangle rule, coarse at pfvi's long steps): the sum is given
+            // the step's quadrature of Y over its stages instead.
+            const double Y_end = (r->megno_Ys + st->trial.megno_dY)/(r->t - r->megno_initial_t);
+            r->megno_Yss += st->trial.megno_Y_integral - Y_end*h;
+            reb_tools_megno_update(r, st->trial.megno_dY, h);
+        }
+    }
 }
 
 static void pfvi_step(struct reb_simulation* r, void* state){

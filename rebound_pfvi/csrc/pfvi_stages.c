@@ -27,6 +27,14 @@
 #include <math.h>
 #include "pfvi.h"
 
+// A variational particle's tangent step is its real particle's step with the
+// centre and omega frozen (pfvi.h, var_N): the same fit, about a centre
+// whose tangent is zero, and no carried low-order parts (a tangent vector's
+// round-off relative to itself stays at the doubles' level; it is never
+// added to a much larger coordinate).
+static const struct pfvi_centre var_centre = {{0., 0., 0.}, {0., 0., 0.}, {0., 0., 0.}, {0., 0., 0.}, 0., SIZE_MAX};
+static const struct pfvi_compensation var_compensation = {{0., 0., 0.}, {0., 0., 0.}};
+
 // The part of the stage equations a step's rounds share (per particle): the
 // unknowns for zero force, L^-1 g with g the start momentum and position
 // terms, and the stage points' parts that do not depend on the unknowns.
@@ -202,11 +210,17 @@ static void stage_velocity_times_h(const struct pfvi_stage_fit* f, const struct 
 // Evaluates the forces at every stage point of the current iterate (and at
 // the first node too when forces depend on velocities, since its velocity is
 // the interpolant's, not v_k). Returns 0, rolled back, on a failure.
-static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){
+// The variational particles are placed at their tangent stage points for
+// the same calls (REBOUND computes their forces beside the real ones); with
+// real = 0 only theirs are kept (the real particles placed at the same
+// stage points as before, their stage values left as they are).
+static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h, int real){
     const struct pfvi_lobatto* const rule = &st->rule;
     const int s = rule->s;
     const int vdep = r->force_is_velocity_dependent;
     struct reb_particle* const ps = r->particles;
+    struct reb_particle* const pv = r->particles_var;
+    const size_t nv = st->var_N;
     if (vdep){
         // The stage velocities of the current iterate, from the forces that
         // made it (stage_a, overwritten below).
@@ -222,6 +236,12 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
         }
     }
     for (int k=vdep ? 0 : 1; k<s; k++){
+        for (size_t v=0; v<nv; v++){
+            double x[3];
+            stage_position(&st->stage_fit[st->var_real[v]], &st->var_stage_start[v], &var_compensation,
+                    (const double (*)[3])st->var_unknowns[v], s, k, x);
+            pv[v].x = x[0]; pv[v].y = x[1]; pv[v].z = x[2];
+        }
         for (size_t i=0; i<N; i++){
             double x[3];
             const struct pfvi_centre* const centre = &st->centre[i];
@@ -246,7 +266,15 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
         if (!pfvi_update_acceleration(r, st, N, t0)){
             return 0;
         }
-        for (size_t i=0; i<N; i++){
+        for (size_t v=0; v<nv; v++){
+            st->var_stage_x[v][k][0] = pv[v].x;
+            st->var_stage_x[v][k][1] = pv[v].y;
+            st->var_stage_x[v][k][2] = pv[v].z;
+            st->var_stage_a[v][k][0] = pv[v].ax;
+            st->var_stage_a[v][k][1] = pv[v].ay;
+            st->var_stage_a[v][k][2] = pv[v].az;
+        }
+        for (size_t i=0; real && i<N; i++){
             st->stage_x[i][k][0] = ps[i].x;
             st->stage_x[i][k][1] = ps[i].y;
             st->stage_x[i][k][2] = ps[i].z;
@@ -326,6 +354,41 @@ static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
             }
         }
     }
+    // The variational particles' stages, from their own last trial or step
+    // along the same polynomial, where they were taken with these particles.
+    const int var_retry = retry && st->var_retry_valid;
+    const int var_extrapolate = extrapolate && st->var_predictor_N == st->var_N;
+    const int var_polynomial = var_retry || var_extrapolate;
+    for (size_t v=0; v<st->var_N; v++){
+        double source[PFVI_STAGES_MAX][3], source_x[PFVI_STAGES_MAX][3];
+        for (int m=0; m<s; m++){
+            for (int c=0; c<3; c++){
+                source[m][c] = var_retry ? st->var_stage_a[v][m][c] : (var_extrapolate ? st->var_predictor_a[v][m][c] : 0.);
+                source_x[m][c] = var_retry ? st->var_stage_x[v][m][c] : (var_extrapolate ? st->var_predictor_x[v][m][c] : 0.);
+            }
+        }
+        const struct reb_particle* const p = &st->var_start[v];
+        const double q0[3] = {p->x, p->y, p->z};
+        const double v0[3] = {p->vx, p->vy, p->vz};
+        const double* const a0 = st->var_end[v].a;
+        for (int k=0; k<s; k++){
+            for (int c=0; c<3; c++){
+                const double t = rule->c[k]*h;
+                if (k == 0 || !var_polynomial){
+                    st->var_stage_a[v][k][c] = a0[c];
+                    st->var_stage_x[v][k][c] = (k == 0) ? q0[c] : q0[c] + t*(v0[c] + 0.5*t*a0[c]);
+                }else{
+                    double sum = 0., sum_x = 0.;
+                    for (int m=0; m<s; m++){
+                        sum += x[k][m]*source[m][c];
+                        sum_x += x[k][m]*source_x[m][c];
+                    }
+                    st->var_stage_a[v][k][c] = sum;
+                    st->var_stage_x[v][k][c] = sum_x;
+                }
+            }
+        }
+    }
 }
 
 
@@ -360,14 +423,253 @@ static double stages_fitted_omega(const struct pfvi_state* st, size_t i){
     return st->stage_fit[i].omega;
 }
 
+// collocation[k][j] = integral of l_j over [0, c^k] (the Lobatto IIIA
+// matrix): sum_j collocation[k][j] (c^j)^m = (c^k)^(m+1)/(m+1), m < s,
+// solved by elimination with partial pivoting on the Vandermonde matrix.
+static void collocation_matrix(const struct pfvi_lobatto* rule, double A[PFVI_STAGES_MAX][PFVI_STAGES_MAX]){
+    const int s = rule->s;
+    double M[PFVI_STAGES_MAX][PFVI_STAGES_MAX], rhs[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
+    for (int m=0; m<s; m++){
+        for (int j=0; j<s; j++){
+            M[m][j] = pow(rule->c[j], m);
+        }
+        for (int k=0; k<s; k++){
+            rhs[m][k] = pow(rule->c[k], m + 1)/(m + 1);
+        }
+    }
+    for (int col=0; col<s; col++){
+        int p = col;
+        for (int m=col+1; m<s; m++){
+            p = (fabs(M[m][col]) > fabs(M[p][col])) ? m : p;
+        }
+        for (int j=0; j<s; j++){
+            const double t = M[col][j]; M[col][j] = M[p][j]; M[p][j] = t;
+            const double u = rhs[col][j]; rhs[col][j] = rhs[p][j]; rhs[p][j] = u;
+        }
+        for (int m=col+1; m<s; m++){
+            const double g = M[m][col]/M[col][col];
+            for (int j=col; j<s; j++){
+                M[m][j] -= g*M[col][j];
+            }
+            for (int k=0; k<s; k++){
+                rhs[m][k] -= g*rhs[col][k];
+            }
+        }
+    }
+    for (int k=0; k<s; k++){
+        for (int j=s-1; j>=0; j--){
+            double sum = rhs[j][k];
+            for (int l=j+1; l<s; l++){
+                sum -= M[j][l]*A[k][l];
+            }
+            A[k][j] = sum/M[j][j];
+        }
+    }
+}
+
+// One round of variational particle v's tangent solve: its real particle's
+// round (classical or fitted) with the centre frozen at 0.
+static void var_round(struct pfvi_state* st, size_t v, int s, double h, const double* hb){
+    const struct pfvi_stage_fit* const f = &st->stage_fit[st->var_real[v]];
+    if (f->classical){
+        classical_round(&st->rule, &st->var_stage_start[v], h, hb, (const double (*)[3])st->var_stage_a[v],
+                st->var_unknowns_next[v]);
+    }else{
+        stage_round(f, &st->var_stage_start[v], &var_centre, s, h, (const double (*)[3])st->var_stage_a[v],
+                (const double (*)[3])st->var_stage_x[v], st->var_unknowns_next[v]);
+    }
+}
+
+// The largest relative change of the variational particles' unknowns in a
+// round, measured as the real solve measures its own (a NaN is kept).
+static double var_change(const struct pfvi_state* st, int s){
+    double change = 0.;
+    for (size_t v=0; v<st->var_N; v++){
+        const double (*y)[3] = st->var_unknowns[v];
+        const double (*yn)[3] = st->var_unknowns_next[v];
+        const int increment = st->stage_fit[st->var_real[v]].classical ? s - 2 : 0;
+        double scale = 0., diff = 0.;
+        for (int c=0; c<3; c++){
+            const double q = fabs(st->var_stage_start[v].q0[c]), d = fabs(y[increment][c]);
+            scale = (q > scale) ? q : scale;
+            scale = (d > scale) ? d : scale;
+        }
+        for (int j=0; j<s-1; j++){
+            for (int c=0; c<3; c++){
+                const double d = fabs(yn[j][c] - y[j][c]);
+                diff = (d > diff || d != d) ? d : diff;
+            }
+        }
+        const double relative = (scale > 0.) ? diff/scale : diff;
+        change = (relative > change || relative != relative) ? relative : change;
+    }
+    return change;
+}
+
+// Variational particle v's velocity change over the step, from its
+// converged tangent stages: the real step's update, centre frozen at 0.
+static void var_velocity_change(const struct pfvi_state* st, size_t v, int s, double h, const double* hb,
+        double inc_v[3]){
+    const struct pfvi_lobatto* const rule = &st->rule;
+    const struct pfvi_stage_fit* const f = &st->stage_fit[st->var_real[v]];
+    const struct pfvi_stage_start* const ss = &st->var_stage_start[v];
+    const double (*y)[3] = st->var_unknowns[v];
+    const double (*sa)[3] = st->var_stage_a[v];
+    if (f->classical){
+        for (int c=0; c<3; c++){
+            double sum = 0.;
+            for (int j=0; j<s; j++){
+                sum += hb[j]*sa[j][c];
+            }
+            inc_v[c] = sum;
+        }
+        return;
+    }
+    const double h2 = h*h;
+    double dv[3] = {0., 0., 0.};
+    for (int k=0; k<s; k++){
+        double qd[3];
+        stage_velocity_times_h(f, ss, y, s, k, qd);
+        const double wk = rule->w[k], wf = h2*(1. + f->beta_m[k]);
+        for (int c=0; c<3; c++){
+            if (f->u2 == 0.){
+                dv[c] += wk*(f->beta_d[k]*qd[c] + wf*sa[k][c]);
+            }else{
+                const double d = (k == 0) ? ss->d0[c] : (k == s - 1) ? ss->d0[c] + y[0][c]
+                    : (1. + f->beta_m[k])*ss->d0[c] + f->bbar[k]*y[0][c] + y[k][c];
+                const double h2a = stage_force_h2(f, ss, &var_centre, h, sa, (const double (*)[3])st->var_stage_x[v], k, c)
+                    - f->u2*d;
+                dv[c] += wk*(f->beta_d[k]*qd[c] + (1. + f->beta_m[k])*h2a);
+            }
+        }
+    }
+    const double gh = f->G*h;
+    for (int c=0; c<3; c++){
+        inc_v[c] = dv[c]/gh;
+    }
+}
+
+// The variational particles after the real stage solve converged: their
+// tangent solve goes on alone (the real particles at their converged stage
+// points, whose stage values are kept) until it too stops; then their end
+// state, and MEGNO's increments over the stages. Returns 0 (rolled back,
+// fault recorded) if a force evaluation failed.
+static int stages_advance_variational(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
+        const double* hb, double change, double previous, int rounds){
+    const struct pfvi_lobatto* const rule = &st->rule;
+    const int s = rule->s;
+    const size_t nv = st->var_N;
+    struct reb_particle* const pv = r->particles_var;
+    enum pfvi_iteration verdict = pfvi_iteration_verdict(change, previous, rounds >= PFVI_ITERATION_MAX);
+    const uint64_t evaluations = st->statistics.n_force_evaluations;
+    while (verdict == PFVI_ITERATE){
+        double (*swap)[PFVI_STAGES_MAX-1][3] = st->var_unknowns;
+        st->var_unknowns = st->var_unknowns_next;
+        st->var_unknowns_next = swap;
+        if (!stage_forces(r, st, N, t0, h, 0)){
+            return 0;
+        }
+        rounds++;
+        previous = change;
+        for (size_t v=0; v<nv; v++){
+            var_round(st, v, s, h, hb);
+        }
+        change = var_change(st, s);
+        verdict = pfvi_iteration_verdict(change, previous, rounds >= PFVI_ITERATION_MAX);
+    }
+    st->trial.variational_evaluations = st->statistics.n_force_evaluations - evaluations;
+    st->trial.variational_unconverged = (verdict != PFVI_CONVERGED);
+    st->var_retry_valid = st->retry_allowed;
+
+    // The end state: x from the last stage point, v from p_k+1 (kept in var_dv).
+    for (size_t v=0; v<nv; v++){
+        double inc_v[3];
+        var_velocity_change(st, v, s, h, hb, inc_v);
+        const struct reb_particle* const p0 = &st->var_start[v];
+        st->var_dv[v] = (struct reb_vec3d){p0->vx + inc_v[0], p0->vy + inc_v[1], p0->vz + inc_v[2]};
+    }
+    if (r->calculate_megno){
+        if (st->collocation_s != s){
+            collocation_matrix(rule, st->collocation);
+            st->collocation_s = s;
+        }
+        // ln|delta| of REBOUND's MEGNO set (the first N variational
+        // particles) at each stage: the tangent stage points, the velocities
+        // of the step's ends and, within, of the collocation polynomial of
+        // the stage forces (stage order s; the interpolant's derivative,
+        // Lobatto IIIB's stage velocity, has order s - 2).
+        double L[PFVI_STAGES_MAX];
+        const size_t n_megno = (r->N < nv) ? r->N : nv;
+        for (int k=0; k<s; k++){
+            double norm2 = 0.;
+            for (size_t v=0; v<n_megno; v++){
+                const struct reb_particle* const p0 = &st->var_start[v];
+                double w[3];
+                if (k == 0){
+                    w[0] = p0->vx; w[1] = p0->vy; w[2] = p0->vz;
+                }else if (k == s - 1){
+                    w[0] = st->var_dv[v].x; w[1] = st->var_dv[v].y; w[2] = st->var_dv[v].z;
+                }else{
+                    double dw[3] = {0., 0., 0.};
+                    for (int j=0; j<s; j++){
+                        for (int c=0; c<3; c++){
+                            dw[c] += st->collocation[k][j]*st->var_stage_a[v][j][c];
+                        }
+                    }
+                    w[0] = p0->vx + h*dw[0]; w[1] = p0->vy + h*dw[1]; w[2] = p0->vz + h*dw[2];
+                }
+                for (int c=0; c<3; c++){
+                    norm2 += st->var_stage_x[v][k][c]*st->var_stage_x[v][k][c] + w[c]*w[c];
+                }
+            }
+            L[k] = 0.5*log(norm2);
+        }
+        double integral = 0.;
+        for (int k=0; k<s; k++){
+            integral += rule->w[k]*L[k];
+        }
+        const double t_rel = t0 - r->megno_initial_t;
+        st->trial.megno_dY = megno_increment(t_rel, h, L[0], L[s-1], h*integral);
+        // Y at each stage, from ln|delta|'s integral up to it (the collocation
+        // rows), and Lobatto's rule over them for <Y>'s integral.
+        double Y_integral = 0.;
+        for (int k=0; k<s; k++){
+            double partial = 0.;
+            for (int j=0; j<s; j++){
+                partial += st->collocation[k][j]*L[j];
+            }
+            const double tk = t_rel + rule->c[k]*h;
+            const double Ys = r->megno_Ys + ((k == s - 1) ? st->trial.megno_dY
+                : megno_increment(t_rel, rule->c[k]*h, L[0], L[k], h*partial));
+            Y_integral += rule->w[k]*megno_Y(Ys, tk);
+        }
+        st->trial.megno_Y_integral = h*Y_integral;
+    }
+    for (size_t v=0; v<nv; v++){
+        double x[3];
+        stage_position(&st->stage_fit[st->var_real[v]], &st->var_stage_start[v], &var_compensation,
+                (const double (*)[3])st->var_unknowns[v], s, s - 1, x);
+        pv[v].x = x[0]; pv[v].y = x[1]; pv[v].z = x[2];
+        pv[v].vx = st->var_dv[v].x; pv[v].vy = st->var_dv[v].y; pv[v].vz = st->var_dv[v].z;
+        pv[v].ax = st->var_stage_a[v][s-1][0];
+        pv[v].ay = st->var_stage_a[v][s-1][1];
+        pv[v].az = st->var_stage_a[v][s-1][2];
+    }
+    return 1;
+}
+
 static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){
     const struct pfvi_lobatto* const rule = &st->rule;
     const int s = rule->s;
     struct reb_particle* const ps = r->particles;
     struct reb_particle* const p0 = st->start;
 
+    const size_t nv = st->var_N;
     for (size_t i=0; i<N; i++){
         stage_start_of(rule, &st->stage_fit[i], &p0[i], &st->centre[i], h, &st->stage_start[i]);
+    }
+    for (size_t v=0; v<nv; v++){
+        stage_start_of(rule, &st->stage_fit[st->var_real[v]], &st->var_start[v], &var_centre, h, &st->var_stage_start[v]);
     }
     stage_predict(st, N, t0, h);
     // The classical form's h w_j: the same products in every round and in
@@ -378,8 +680,11 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
     }
 
     // Fixed-point iteration; `unknowns` is the iterate at which the forces
-    // in stage_a were evaluated (after the first round).
+    // in stage_a were evaluated (after the first round). The variational
+    // particles' tangent solve runs in the same rounds; neither its changes
+    // nor anything else of theirs enters the real solve's verdict.
     double previous = INFINITY, change = INFINITY;
+    double var_previous = INFINITY, var_changed = INFINITY;
     int rounds = 0, converged = 0;
     for (int iteration=0; iteration<=PFVI_ITERATION_MAX; iteration++){
         for (size_t i=0; i<N; i++){
@@ -391,7 +696,11 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
                         (const double (*)[3])st->stage_a[i], (const double (*)[3])st->stage_x[i], st->unknowns_next[i]);
             }
         }
+        for (size_t v=0; v<nv; v++){
+            var_round(st, v, s, h, hb);
+        }
         if (iteration > 0){
+            var_changed = var_change(st, s);
             change = 0.;
             for (size_t i=0; i<N; i++){
                 const double (*y)[3] = st->unknowns[i];
@@ -424,11 +733,15 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
         double (*swap)[PFVI_STAGES_MAX-1][3] = st->unknowns;
         st->unknowns = st->unknowns_next;
         st->unknowns_next = swap;
-        if (!stage_forces(r, st, N, t0, h)){
+        swap = st->var_unknowns;
+        st->var_unknowns = st->var_unknowns_next;
+        st->var_unknowns_next = swap;
+        if (!stage_forces(r, st, N, t0, h, 1)){
             return PFVI_TRIAL_ERROR;
         }
         rounds++;
         previous = (iteration == 0) ? INFINITY : change;
+        var_previous = (iteration == 0) ? INFINITY : var_changed;
     }
     st->trial.rounds = (uint64_t)rounds;
     st->trial.change = change;
@@ -437,6 +750,7 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
     st->retry_t0 = t0;
     st->retry_h = h;
     st->retry_stages = s;
+    st->var_retry_valid = 0;
     if (!converged){
         pfvi_roll_back(r, st, N, t0);
         return PFVI_TRIAL_NOT_CONVERGED;
@@ -497,6 +811,9 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
         // Kept in dv until the step is known to be taken.
         st->dv[i] = (struct reb_vec3d){inc_v[0], inc_v[1], inc_v[2]};
     }
+    if (nv && !stages_advance_variational(r, st, N, t0, h, hb, var_changed, var_previous, rounds)){
+        return PFVI_TRIAL_ERROR;
+    }
     r->t = t0 + h;
     return PFVI_TRIAL_OK;
 }
@@ -530,6 +847,15 @@ static void stages_commit(struct reb_simulation* r, struct pfvi_state* st, size_
     st->predictor_h = h;
     st->predictor_t = r->t;
     st->retry_valid = 0;  // stage_a now holds the predictor's old buffer
+    // The variational particles' stages likewise.
+    swap = st->var_predictor_a;
+    st->var_predictor_a = st->var_stage_a;
+    st->var_stage_a = swap;
+    swap = st->var_predictor_x;
+    st->var_predictor_x = st->var_stage_x;
+    st->var_stage_x = swap;
+    st->var_predictor_N = st->var_N;
+    st->var_retry_valid = 0;
 }
 
 // Half the trace of the step's map for a 1-D particle under a = -W2 d

@@ -39,6 +39,17 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->velocities);
     free(st->stage_start);
     free(st->origin);
+    free(st->var_real);
+    free(st->var_start);
+    free(st->var_end);
+    free(st->var_stage_a);
+    free(st->var_predictor_a);
+    free(st->var_stage_x);
+    free(st->var_predictor_x);
+    free(st->var_unknowns);
+    free(st->var_unknowns_next);
+    free(st->var_stage_start);
+    free(st->var_dv);
     free(st);
 }
 
@@ -108,6 +119,62 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     }
     st->N_allocated = N;
     return 1;
+}
+
+int pfvi_var_scratch(struct pfvi_state* st, size_t n){
+    if (n <= st->var_allocated){
+        return 1;
+    }
+    int ok = 1;
+    st->var_real = pfvi_grow(st->var_real, n*sizeof(*st->var_real), &ok);
+    st->var_start = pfvi_grow(st->var_start, n*sizeof(*st->var_start), &ok);
+    st->var_end = pfvi_grow(st->var_end, n*sizeof(*st->var_end), &ok);
+    st->var_stage_a = pfvi_grow(st->var_stage_a, n*sizeof(*st->var_stage_a), &ok);
+    st->var_predictor_a = pfvi_grow(st->var_predictor_a, n*sizeof(*st->var_predictor_a), &ok);
+    st->var_stage_x = pfvi_grow(st->var_stage_x, n*sizeof(*st->var_stage_x), &ok);
+    st->var_predictor_x = pfvi_grow(st->var_predictor_x, n*sizeof(*st->var_predictor_x), &ok);
+    st->var_unknowns = pfvi_grow(st->var_unknowns, n*sizeof(*st->var_unknowns), &ok);
+    st->var_unknowns_next = pfvi_grow(st->var_unknowns_next, n*sizeof(*st->var_unknowns_next), &ok);
+    st->var_stage_start = pfvi_grow(st->var_stage_start, n*sizeof(*st->var_stage_start), &ok);
+    st->var_dv = pfvi_grow(st->var_dv, n*sizeof(*st->var_dv), &ok);
+    if (st->var_predictor_N > n){
+        st->var_predictor_N = 0;  // (an archive's, larger than what it now describes)
+    }
+    if (!ok){
+        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_MEMORY, .n = n};
+        return 0;
+    }
+    st->var_allocated = n;
+    st->var_end_N = 0;
+    return 1;
+}
+
+int pfvi_var_map(const struct reb_simulation* r, struct pfvi_state* st){
+    const size_t N = r->N, n = r->N_var;
+    size_t covered = 0;
+    for (size_t v=0; v<r->N_var_config; v++){
+        const struct reb_variational_configuration* const vc = &r->var_config[v];
+        if (vc->index < 0){
+            return 0;
+        }
+        const size_t first = (size_t)vc->index;
+        if (vc->testparticle >= 0){
+            if ((size_t)vc->testparticle >= N || first >= n){
+                return 0;
+            }
+            st->var_real[first] = (size_t)vc->testparticle;
+            covered++;
+        }else{
+            if (first + N > n){
+                return 0;
+            }
+            for (size_t i=0; i<N; i++){
+                st->var_real[first + i] = i;
+            }
+            covered += N;
+        }
+    }
+    return covered == n;
 }
 
 int pfvi_particle_finite(const struct reb_particle* p){
@@ -331,6 +398,19 @@ void pfvi_discard_implausible(const struct reb_simulation* r, struct pfvi_state*
     if (!predictor){
         st->predictor_stages = 0;
     }
+    // The variational particles' stages: finite (deviations may be large, never infinite).
+    const size_t nv = (st->var_predictor_N <= st->var_allocated) ? st->var_predictor_N : 0;
+    int var_predictor = predictor && nv > 0;
+    for (size_t v=0; var_predictor && v<nv; v++){
+        for (int k=0; k<st->predictor_stages; k++){
+            for (int c=0; c<3; c++){
+                var_predictor &= isfinite(st->var_predictor_a[v][k][c]) && isfinite(st->var_predictor_x[v][k][c]);
+            }
+        }
+    }
+    if (!var_predictor){
+        st->var_predictor_N = 0;
+    }
     // The symmetric track, its scale and the time's carried rounding.
     if (!(st->rho > 0. && isfinite(st->rho)) || !(st->rho_sign == 1. || st->rho_sign == -1.)
             || !(st->track_done >= 0. && isfinite(st->track_done)) || !(st->track_kappa > 0. && isfinite(st->track_kappa))){
@@ -362,8 +442,35 @@ void pfvi_discard_implausible(const struct reb_simulation* r, struct pfvi_state*
     }
 }
 
+int pfvi_var_is_end(const struct reb_simulation* r, const struct pfvi_state* st){
+    const size_t n = r->N_var;
+    if (st->var_end_N != n || n == 0){
+        return 0;
+    }
+    const struct reb_particle* const pv = r->particles_var;
+    int same = 1;
+    for (size_t v=0; v<n; v++){
+        same &= same_bits(&pv[v].x, st->var_end[v].xv, 6) & same_bits(&pv[v].m, &st->var_end[v].m, 1);
+    }
+    return same;
+}
+
+void pfvi_var_keep_end(const struct reb_simulation* r, struct pfvi_state* st){
+    const size_t n = r->N_var;
+    const struct reb_particle* const pv = r->particles_var;
+    for (size_t v=0; v<n; v++){
+        memcpy(st->var_end[v].xv, &pv[v].x, sizeof(st->var_end[v].xv));
+        st->var_end[v].m = pv[v].m;
+        st->var_end[v].a[0] = pv[v].ax; st->var_end[v].a[1] = pv[v].ay; st->var_end[v].a[2] = pv[v].az;
+    }
+    st->var_end_N = n;
+}
+
 void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
     memcpy(r->particles, st->start, N*sizeof(struct reb_particle));
+    if (st->var_N && st->var_N == r->N_var){
+        memcpy(r->particles_var, st->var_start, st->var_N*sizeof(struct reb_particle));
+    }
     r->t = t0;
     st->cache_N = 0;
 }

@@ -48,6 +48,10 @@ static int fixed_frequency_stable(struct reb_simulation* r, struct pfvi_state* s
 enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){
     const struct pfvi_scheme* const scheme = pfvi_scheme_of(st);
     st->statistics.n_attempts++;
+    st->trial.variational_evaluations = 0;
+    st->trial.variational_unconverged = 0;
+    st->trial.megno_dY = 0.;
+    st->trial.megno_Y_integral = 0.;
     if (!scheme->prepare(st, h)){
         pfvi_roll_back(r, st, N, t0);
         return PFVI_TRIAL_ERROR;
@@ -109,6 +113,8 @@ void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* st, size_t N,
     stats->n_iterations += rounds;
     stats->iterations_max = (rounds > stats->iterations_max) ? rounds : stats->iterations_max;
     stats->n_u_limited += st->trial.n_limited;
+    stats->n_variational_evaluations += st->trial.variational_evaluations;
+    stats->n_variational_unconverged += (uint64_t)st->trial.variational_unconverged;
     stats->omega_min = st->trial.omega_min;
     stats->omega_max = st->trial.omega_max;
 }

@@ -152,6 +152,26 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
         }
     }
     const int compensated = !literal;
+    // The variational particles: the tangent of the same kick and rotation
+    // (their real particle's fit, about a centre frozen over the step: d =
+    // delta q, w = delta v), placed at the end for the same force evaluation.
+    for (size_t v=0; v<st->var_N; v++){
+        const struct pfvi_two_point_fit* const f = &st->fit[st->var_real[v]];
+        const struct reb_particle* const q = &st->var_start[v];
+        const double* const a = st->var_end[v].a;
+        const double w2 = f->omega*f->omega;
+        const double g = literal ? f->gamma : 1.;
+        const double d[3] = {q->x, q->y, q->z};
+        const double w[3] = {q->vx/g + f->half_kick*(a[0] + w2*d[0]), q->vy/g + f->half_kick*(a[1] + w2*d[1]),
+            q->vz/g + f->half_kick*(a[2] + w2*d[2])};
+        const double k = f->keep, rc = f->cos_u_m_keep;
+        struct reb_particle* const p = &r->particles_var[v];
+        p->x = k*d[0] + (rc*d[0] + f->h_sinc_u*w[0]);
+        p->y = k*d[1] + (rc*d[1] + f->h_sinc_u*w[1]);
+        p->z = k*d[2] + (rc*d[2] + f->h_sinc_u*w[2]);
+        st->var_dv[v] = (struct reb_vec3d){k*w[0] + (rc*w[0] - f->omega_sin_u*d[0]),
+            k*w[1] + (rc*w[1] - f->omega_sin_u*d[1]), k*w[2] + (rc*w[2] - f->omega_sin_u*d[2])};
+    }
 
     r->t = t0 + h;
     if (!pfvi_update_acceleration(r, st, N, t0)){
@@ -197,6 +217,33 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
             ps[i].vy = vc[1] + g*((vr.y - vc[1]) + kick_y);
             ps[i].vz = vc[2] + g*((vr.z - vc[2]) + kick_z);
         }
+    }
+    // The variational particles' final kick, with their forces at the end.
+    for (size_t v=0; v<st->var_N; v++){
+        const struct pfvi_two_point_fit* const f = &st->fit[st->var_real[v]];
+        struct reb_particle* const p = &r->particles_var[v];
+        const double w2 = f->omega*f->omega;
+        const double g = literal ? f->gamma : 1.;
+        const double x1[3] = {p->x, p->y, p->z}, a1[3] = {p->ax, p->ay, p->az};
+        p->vx = g*(st->var_dv[v].x + f->half_kick*(a1[0] + w2*x1[0]));
+        p->vy = g*(st->var_dv[v].y + f->half_kick*(a1[1] + w2*x1[1]));
+        p->vz = g*(st->var_dv[v].z + f->half_kick*(a1[2] + w2*x1[2]));
+    }
+    if (r->calculate_megno && st->var_N){
+        // ln|delta| of REBOUND's MEGNO set (the first N variational particles)
+        // at the two nodes, the trapezoidal rule between (docs/megno.md).
+        const size_t n_megno = (r->N < st->var_N) ? r->N : st->var_N;
+        double start = 0., end = 0.;
+        for (size_t v=0; v<n_megno; v++){
+            const struct reb_particle* const p0 = &st->var_start[v];
+            const struct reb_particle* const p1 = &r->particles_var[v];
+            start += (p0->x*p0->x + p0->y*p0->y + p0->z*p0->z) + (p0->vx*p0->vx + p0->vy*p0->vy + p0->vz*p0->vz);
+            end += (p1->x*p1->x + p1->y*p1->y + p1->z*p1->z) + (p1->vx*p1->vx + p1->vy*p1->vy + p1->vz*p1->vz);
+        }
+        const double L0 = 0.5*log(start), L1 = 0.5*log(end);
+        const double t_rel = t0 - r->megno_initial_t;
+        st->trial.megno_dY = megno_increment(t_rel, h, L0, L1, 0.5*h*(L0 + L1));
+        st->trial.megno_Y_integral = 0.5*h*(megno_Y(r->megno_Ys, t_rel) + megno_Y(r->megno_Ys + st->trial.megno_dY, t_rel + h));
     }
     st->trial.rounds = 1;
     return PFVI_TRIAL_OK;
