@@ -480,27 +480,34 @@ static void var_round(struct pfvi_state* st, size_t v, int s, double h, const do
     }
 }
 
+// One particle's largest change of its unknowns between two iterates,
+// relative to the larger of its start position and its step's increment
+// (unknown `increment`). Written so that a NaN makes the change NaN, not 0.
+static inline double unknowns_change(const double (*y)[3], const double (*yn)[3], const double* q0,
+        int increment, int s){
+    double scale = 0., diff = 0.;
+    for (int c=0; c<3; c++){
+        const double q = fabs(q0[c]), d = fabs(y[increment][c]);
+        scale = (q > scale) ? q : scale;
+        scale = (d > scale) ? d : scale;
+    }
+    for (int j=0; j<s-1; j++){
+        for (int c=0; c<3; c++){
+            const double d = fabs(yn[j][c] - y[j][c]);
+            diff = (d > diff || d != d) ? d : diff;
+        }
+    }
+    return (scale > 0.) ? diff/scale : diff;
+}
+
 // The largest relative change of the variational particles' unknowns in a
 // round, measured as the real solve measures its own (a NaN is kept).
 static double var_change(const struct pfvi_state* st, int s){
     double change = 0.;
     for (size_t v=0; v<st->var_N; v++){
-        const double (*y)[3] = st->var_unknowns[v];
-        const double (*yn)[3] = st->var_unknowns_next[v];
         const int increment = st->stage_fit[st->var_real[v]].classical ? s - 2 : 0;
-        double scale = 0., diff = 0.;
-        for (int c=0; c<3; c++){
-            const double q = fabs(st->var_stage_start[v].q0[c]), d = fabs(y[increment][c]);
-            scale = (q > scale) ? q : scale;
-            scale = (d > scale) ? d : scale;
-        }
-        for (int j=0; j<s-1; j++){
-            for (int c=0; c<3; c++){
-                const double d = fabs(yn[j][c] - y[j][c]);
-                diff = (d > diff || d != d) ? d : diff;
-            }
-        }
-        const double relative = (scale > 0.) ? diff/scale : diff;
+        const double relative = unknowns_change((const double (*)[3])st->var_unknowns[v],
+                (const double (*)[3])st->var_unknowns_next[v], st->var_stage_start[v].q0, increment, s);
         change = (relative > change || relative != relative) ? relative : change;
     }
     return change;
@@ -703,24 +710,9 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
             var_changed = var_change(st, s);
             change = 0.;
             for (size_t i=0; i<N; i++){
-                const double (*y)[3] = st->unknowns[i];
-                const double (*yn)[3] = st->unknowns_next[i];
-                double scale = 0., diff = 0.;
                 const int increment = st->stage_fit[i].classical ? s - 2 : 0;
-                for (int c=0; c<3; c++){
-                    const double q = fabs(st->stage_start[i].q0[c]), d = fabs(y[increment][c]);
-                    scale = (q > scale) ? q : scale;
-                    scale = (d > scale) ? d : scale;
-                }
-                for (int j=0; j<s-1; j++){
-                    for (int c=0; c<3; c++){
-                        // (a NaN is kept: it makes the change NaN)
-                        const double d = fabs(yn[j][c] - y[j][c]);
-                        diff = (d > diff || d != d) ? d : diff;
-                    }
-                }
-                // Written so that a NaN makes the change NaN, not 0.
-                const double relative = (scale > 0.) ? diff/scale : diff;
+                const double relative = unknowns_change((const double (*)[3])st->unknowns[i],
+                        (const double (*)[3])st->unknowns_next[i], st->stage_start[i].q0, increment, s);
                 change = (relative > change || relative != relative) ? relative : change;
             }
             const enum pfvi_iteration verdict = pfvi_iteration_verdict(change, previous,
