@@ -318,8 +318,11 @@ def test_non_finite_force_at_a_stage_point_leaves_the_state_untouched(s):
 
 @pytest.mark.parametrize("s", [3, 4, 5, 6])
 def test_stage_solve_that_diverges_is_refused(s):
-    # A spring so stiff that h^2 k >> 1: the fixed-point iteration diverges.
-    sim = harmonic_oscillator(50.0, stages=s, fitting="none")
+    # A spring so stiff that h^2 k = 100: the rounds diverge (no partner:
+    # the plain round, its change growing three times). At h^2 k = 25 the
+    # 5-stage rounds grow once, then converge (measured: 46 rounds) to the
+    # stage equations' one solution (they are linear here), so that step is taken.
+    sim = harmonic_oscillator(100.0, stages=s, fitting="none")
     sim.dt = 0.1
     before = snapshot(sim)
     with pytest.raises(RuntimeError, match=rf"the {s}-stage solve did not converge.*state restored"):
@@ -368,7 +371,12 @@ def test_the_solution_does_not_depend_on_the_first_iterate(s, fitting):
     worst = max(abs(a - b) for p, q in zip(warm.particles, cold.particles)
                 for a, b in zip((p.x, p.y, p.vx, p.vy), (q.x, q.y, q.vx, q.vy)))
     assert worst / scale < 1e-14
-    assert warm.integrator.n_iterations < cold.integrator.n_iterations
+    if fitting == "none":
+        # The classical form starts from the two-body predictor either way
+        # (the last step's stages only extrapolate what acts beyond the pair).
+        assert warm.integrator.n_iterations == cold.integrator.n_iterations
+    else:
+        assert warm.integrator.n_iterations < cold.integrator.n_iterations
 
 
 @pytest.mark.parametrize("s, per_orbit, most", [(4, 100, 4.7), (4, 1000, 3.1), (6, 100, 4.1), (8, 100, 3.6)])

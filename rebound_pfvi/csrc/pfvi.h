@@ -10,6 +10,8 @@
  *   pfvi_two_point.c,  the schemes: the two-point discrete Lagrangian
  *   pfvi_stages.c      (K&V section 3), the s-point one (K&V, "Increasing the
  *                      algebraic order")
+ *   pfvi_solve.c       the s-point stage solve: Newton rounds with each body's
+ *                      partner Jacobian, the two-body predictor, the stop rule
  *   pfvi_fitting.c     coefficients: fitted b, bbar, B, Bbar, normalisation, limiting u
  *   pfvi_lobatto.c     quadrature: the Gauss-Lobatto rule
  * and beside them
@@ -105,6 +107,13 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // decreases, and has converged if that change is at most the tolerance.
 #define PFVI_ITERATION_MAX 50
 #define PFVI_ITERATION_TOLERANCE 1e-12
+// The s-point stage solve's stop by its measured rate (pfvi_solve.c): once
+// theta/(1 - theta) times the last correction (theta: its ratio to the one
+// before) is below RESOLUTION (2^-52, relative), the corrected iterate gets
+// one final round, whose change must be at most CONFIRM (2^-48) for it to
+// be taken; otherwise the rounds go on.
+#define PFVI_SOLVE_RESOLUTION 0x1p-52
+#define PFVI_SOLVE_CONFIRM 0x1p-48
 // Step control. Standard controller: next h = h * SAFETY * (epsilon/error)^(1/ORDER),
 // the factor kept within [SHRINK_MIN, GROW_MAX]; ORDER is the measured order
 // in h of the osculating-circle estimate (docs/adaptive.md).
@@ -199,6 +208,9 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // many of its lengths; beyond, the first iterate is the start state's
 // Taylor path (a step after a much shorter one: a capped step).
 #define PFVI_PREDICTOR_RATIO_MAX 2.0
+// Newton iterations on Kepler's equation per stage point of the two-body
+// predictor, at most (the Taylor path if it does not converge).
+#define PFVI_PREDICTOR_KEPLER_ITERATIONS 30
 
 
 /* ---------------------------------------------------- quadrature (lobatto) */
@@ -232,6 +244,8 @@ struct pfvi_lobatto {
     double det_classical;   // determinant of the stage matrix at u = 0 (singularity guard), set by pfvi_fitting.c
 };
 PFVI_INTERNAL int pfvi_lobatto_compute(int s, struct pfvi_lobatto* rule);
+// The s Lagrange basis polynomials of the rule's nodes at tau: l[m] = l_m(tau).
+PFVI_INTERNAL void pfvi_lagrange_at(const struct pfvi_lobatto* rule, double tau, double* l);
 
 /* --------------------------------------------------- coefficients (fitting) */
 
@@ -358,6 +372,39 @@ PFVI_INTERNAL double pfvi_osculating_error(const double x0[3], const struct pfvi
 // One particle's part of the stage equations that a step's rounds share:
 // its start, the unknowns at zero force, and the parts of the stage points
 // that do not depend on the unknowns.
+// The linear structure of one particle's stage equations, as the solve
+// sees them (pfvi_solve.c): R(y) = y - yc + S F(x(y)) with the stage points
+// x_k = base_k + sum_l X[k][l] y_l and F_k = fscale a_k (+ u2 d_k); stages
+// 1 .. k_last carry forces that act within the step; y[increment] is the
+// step's position increment (the change is measured relative to it).
+struct pfvi_solve_form {
+    int m;
+    int k_last;
+    int increment;
+    double fscale;
+    double u2;
+    double S[PFVI_STAGES_MAX-1][PFVI_STAGES_MAX];
+    double X[PFVI_STAGES_MAX][PFVI_STAGES_MAX-1];
+};
+// One body's Newton correction (pfvi_solve.c): NONE takes the plain round;
+// SINGLE is corrected with its partner's pull, after its partner; PAIR
+// corrects a pair of mutual partners in their relative coordinate (MEMBER:
+// the pair's other body, done with it).
+enum { PFVI_NEWTON_NONE = 0, PFVI_NEWTON_SINGLE = 1, PFVI_NEWTON_PAIR = 2, PFVI_NEWTON_MEMBER = 3 };
+struct pfvi_newton {
+    int kind;
+    size_t partner;
+    size_t companion;   // SINGLE about a pair's barycentre: the partner's partner (else SIZE_MAX)
+    double P[PFVI_STAGES_MAX][PFVI_STAGES_MAX];   // LU of I + S diag(g) X
+    int Ppiv[PFVI_STAGES_MAX];
+    double Q[PFVI_STAGES_MAX-1][PFVI_STAGES_MAX]; // P^-1 S
+    double C[PFVI_STAGES_MAX][PFVI_STAGES_MAX];   // LU of Woodbury's capacitance matrix
+    int Cpiv[PFVI_STAGES_MAX];
+    double n[PFVI_STAGES_MAX][3];  // direction from the partner at each stage (softened length)
+    double d[PFVI_STAGES_MAX];     // the rank-one weight 3 fscale alpha_k
+    double gc[PFVI_STAGES_MAX];    // the isotropic part -fscale alpha_k
+};
+
 struct pfvi_stage_start {
     double q0[3];
     double v0[3];                        // the start velocity (the classical form's)
@@ -495,6 +542,8 @@ struct pfvi_statistics {
     uint64_t n_variational_evaluations; // force evaluations for the variational particles alone (their
                                    // tangent solve going on after the real one converged)
     uint64_t n_variational_unconverged; // steps whose tangent solve stopped short of round-off
+    uint64_t n_solve_recovered;    // steps whose stage solve refreshed or dropped its Newton Jacobians
+    uint64_t n_solve_halved;       // trial steps halved because their stage solve failed
 };
 
 // What a trial step found, committed only if the step is taken.
@@ -508,6 +557,7 @@ struct pfvi_trial_record {
     double change;                 // the stage solve's last relative change
     double omega_min;
     double omega_max;
+    int solve_recovered;           // the stage solve refreshed or dropped its Jacobians
 };
 
 struct pfvi_compensation {
@@ -670,6 +720,20 @@ struct pfvi_state {
     double (*velocities)[PFVI_STAGES_MAX][3];
     // What each round of a step reuses, per particle (pfvi_stages.c).
     struct pfvi_stage_start* stage_start;
+    // The stage solve (pfvi_solve.c): each particle's form (pointing into
+    // solve_forms, or at the classical one every unfitted particle shares),
+    // the stage points of the iterate the Jacobians are taken at, the
+    // Newton units and the order they are corrected in.
+    const struct pfvi_solve_form** solve_form;
+    struct pfvi_solve_form* solve_forms;
+    struct pfvi_solve_form solve_form_classical;
+    double (*solve_x)[PFVI_STAGES_MAX][3];
+    struct pfvi_newton* newton;
+    size_t* newton_order;
+    size_t* newton_index;
+    unsigned char* newton_mark;
+    double var_solve_change;       // the variational particles' last two changes in the solve's rounds
+    double var_solve_previous;
     // The last step's stage accelerations seed the next solve if it starts
     // where that step ended (same s, N and t). Saved in archives with
     // predictor_a, so that a continued run is bit-identical.
@@ -813,7 +877,7 @@ static inline double megno_Y(double Ys, double t){
     return (t != 0.) ? Ys/t : 0.;
 }
 
-/* ------------------------------------------------------- schemes and step */
+/* ------------------------------------------------------------ stage solve */
 
 // Outcome of one trial step. A trial leaves the end state in the particles
 // and commits nothing; on anything but PFVI_TRIAL_OK the particles and t are
@@ -823,6 +887,54 @@ enum pfvi_trial {
     PFVI_TRIAL_ERROR = 0,            // refused, fault recorded
     PFVI_TRIAL_NOT_CONVERGED = -1,   // the stage solve did not converge (shorter steps may)
 };
+
+
+// What a scheme hands the stage solve (pfvi_stages.c's two forms): the
+// forces at the stage points of the iterate st->unknowns (stages k_first ..
+// k_last, and stage 0 too where forces depend on velocities; 0 if refused,
+// rolled back), one round unknowns_next = G(unknowns) for the real and
+// variational particles, and the stage points of unknowns into solve_x.
+struct pfvi_solve_ops {
+    int (*forces)(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
+            int k_first, int k_last);
+    void (*round)(struct pfvi_state* st, size_t N, double h);
+    void (*positions)(struct pfvi_state* st, size_t N, double h);
+    // The iterate whose stage points are solve_x, for the particles whose
+    // form can take it (the others keep theirs).
+    void (*start_at)(struct pfvi_state* st, size_t N);
+};
+// Where a scheme's first iterate came from: the last trial of this same step
+// (a retry: kept), or the last step's stages (extrapolated), or neither.
+enum { PFVI_PREDICTED_NONE = 0, PFVI_PREDICTED_RETRY = 1, PFVI_PREDICTED_EXTRAPOLATED = 2 };
+enum pfvi_solve_next { PFVI_SOLVE_ITERATE = 0, PFVI_SOLVE_FINAL = 1, PFVI_SOLVE_CONVERGED = 2,
+    PFVI_SOLVE_DIVERGING = 3, PFVI_SOLVE_FAILED = -1 };
+// The largest change of one particle's unknowns y -> yn, relative to the
+// larger of |q0| and its step's increment y[increment]; NaN kept.
+PFVI_INTERNAL double pfvi_solve_change(const double (*y)[3], const double (*yn)[3], const double* q0,
+        int increment, int s);
+// The stop rule (PFVI_SOLVE_RESOLUTION): after a correction of size change
+// following one of size previous.
+PFVI_INTERNAL enum pfvi_solve_next pfvi_solve_verdict(double change, double previous, int last_round);
+// The next iterate becomes the current one (real and variational particles).
+PFVI_INTERNAL void pfvi_solve_swap(struct pfvi_state* st);
+// The Newton units at the stage points solve_x (partners: st->partners);
+// 0 if some body's matrix was singular (that body takes the plain round).
+PFVI_INTERNAL int pfvi_newton_prepare(struct pfvi_state* st, size_t N, const struct pfvi_field* field);
+// yn <- y + M^-1 (yn - y) for every unit.
+PFVI_INTERNAL void pfvi_newton_correct(struct pfvi_state* st, size_t N, const double (*y)[PFVI_STAGES_MAX-1][3],
+        double (*yn)[PFVI_STAGES_MAX-1][3]);
+// The rounds from the first iterate in st->unknowns to convergence: OK
+// (unknowns converged, stage_a and stage_x at its stage points, every
+// stage), NOT_CONVERGED, or ERROR (rolled back, fault recorded).
+PFVI_INTERNAL enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* st, size_t N,
+        double t0, double h, const struct pfvi_solve_ops* ops, int predicted);
+// The two-body predictor: each body's stage points (solve_x) along its
+// two-body orbit about its partner, mutual pairs about their barycentre,
+// the rest of the acceleration held at its start value.
+PFVI_INTERNAL void pfvi_solve_predict(struct pfvi_state* st, size_t N, const struct pfvi_field* field, double h,
+        int extrapolate);
+
+/* ------------------------------------------------------- schemes and step */
 
 // A scheme is a table on the one stepping skeleton of pfvi_step.c: its fit of
 // one particle, the fitted frequency, the advance of all particles (forces

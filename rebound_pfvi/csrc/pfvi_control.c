@@ -92,6 +92,7 @@ static double control_seed(struct reb_simulation* r, struct pfvi_state* st, size
             shrink = fmax(PFVI_CONTROL_SHRINK_MIN, PFVI_CONTROL_SAFETY*pow(st->options.epsilon/view.error, 1./PFVI_CONTROL_ORDER));
         }
         st->statistics.n_rejected++;
+        st->statistics.n_solve_halved += (trial == PFVI_TRIAL_NOT_CONVERGED);
         rejections++;
         const double h_next = h*shrink;
         if (rejections >= PFVI_CONTROL_MAX_REJECTIONS || t0 + h_next == t0){
@@ -150,6 +151,7 @@ static double control_reversible(struct reb_simulation* r, struct pfvi_state* st
         }
         if (trial == PFVI_TRIAL_NOT_CONVERGED){
             st->statistics.n_rejected++;
+            st->statistics.n_solve_halved++;
             hi = h;
             log_h_prev = NAN;
             h *= 0.5;
@@ -412,6 +414,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
             }
             st->statistics.n_rejected++;
             st->statistics.n_asymmetric++;
+            st->statistics.n_solve_halved++;
             h *= 0.5;
             if (t0 + h == t0){
                 st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_NOT_CONVERGED, .n = (size_t)o->stages,
@@ -483,6 +486,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
             }
         }
         st->statistics.n_rejected++;
+        st->statistics.n_solve_halved += (trial == PFVI_TRIAL_NOT_CONVERGED);
         shortened = 1;
         h = h_next;
         if (t0 + sign*h == t0){

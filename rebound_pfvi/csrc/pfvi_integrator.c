@@ -40,9 +40,12 @@ const struct reb_integrator pfvi_integrator = {
     "of the next), and with fitting = 'none' is exactly velocity Verlet. With s = 3 "
     "to " PFVI_STR(PFVI_STAGES_MAX) " Gauss-Lobatto nodes and interior corrections (K&V, 'Increasing the algebraic "
     "order'; Marsden & West 2001, section 2.6) the order is 2s - 2 and each step solves for the stage "
-    "points by fixed-point iteration, stopped as in IRKGL16 (Antonana, Makazaga & "
-    "Murua 2017, Numer. Algorithms, doi:10.1007/s11075-017-0287-z) when the change is zero or "
-    "stops decreasing; a solve that does not converge is retried shorter or refused. Where "
+    "points by rounds corrected with Newton's method on each body's partner's pull (a simplified "
+    "Newton iteration as in Antonana, Makazaga & Murua 2018, Numer. Algorithms 78, 63), from each "
+    "body's two-body orbit about its partner, stopped when the measured rate of convergence says "
+    "the doubles' resolution is reached and one more round confirms it; a solve that still does "
+    "not converge (its change growing after the Jacobians were refreshed and dropped) is retried "
+    "shorter (n_solve_halved) or refused. Where "
     "omega = 0 (fitting 'none', the default) the step is Lobatto IIIA-IIIB in Runge-Kutta-"
     "Nystrom form with coefficients on which its symplecticity and symmetry hold exactly in "
     "doubles, and x, v and t advance by compensated sums, so that round-off grows like a "
@@ -149,9 +152,13 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "about its partner (centre 'partner') it is not. s = 8 (default): order 14, the fastest at "
         "equal error under the symmetric step control from position errors of about 1e-7 of the orbit "
         "down (s = 6 is as fast at 1e-6; docs of rebound_pfvi's source). s >= 3: interior corrections delta q^j made stationary "
-        "(K&V, 'Increasing the algebraic order'), solved by "
-        "fixed-point iteration with s - 1 force evaluations per iteration (s if forces depend "
-        "on velocities), at most " PFVI_STR(PFVI_ITERATION_MAX) " iterations per step. "
+        "(K&V, 'Increasing the algebraic order'). The stage equations are solved by rounds, each "
+        "evaluating the forces at the stage points and corrected by Newton's method with each "
+        "body's partner's tidal pull (mutual partners in their relative coordinate), from each "
+        "body's two-body orbit about its partner; they stop by the measured rate of convergence, "
+        "with one confirming round (about 3 to 4 rounds of s - 2 force evaluations, plus one at "
+        "the step's end; s per round if forces depend on velocities), at most "
+        PFVI_STR(PFVI_ITERATION_MAX) " rounds per step (rebound_pfvi's docs, the stage solve). "
         "Default " PFVI_STR(PFVI_STAGES_DEFAULT) ".",
         REB_INT, stages),
     PFVI_OPTION("Largest |u| = omega*|dt| used in the fitted coefficients; a larger value is "
@@ -284,6 +291,13 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "decreasing, or " PFVI_STR(PFVI_ITERATION_MAX) " rounds) above " PFVI_STR(PFVI_ITERATION_TOLERANCE)
         " (relative); their step is kept, since the real step never depends on them.",
         REB_UINT64, n_variational_unconverged),
+    PFVI_STATISTIC("steps whose s-point stage solve saw its Newton correction fail (a change that grew, "
+        "or a singular matrix) and went on with its Jacobians refreshed, or with the plain round "
+        "(rebound_pfvi's docs, the stage solve); the step is then taken as any other.",
+        REB_UINT64, n_solve_recovered),
+    PFVI_STATISTIC("trial steps halved because their stage solve did not converge (included in "
+        "n_rejected; with the symmetric control such a step is not time-symmetric).",
+        REB_UINT64, n_solve_halved),
     PFVI_STATISTIC("smallest omega used in the last step (after limiting).",
         REB_DOUBLE, omega_min),
     PFVI_STATISTIC("largest omega used in the last step (after limiting).",
@@ -608,7 +622,9 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
     const struct pfvi_options* const o = &st->options;
     const int fitted = (o->fitting != PFVI_FITTING_NONE);
     const int symmetric = (o->epsilon > 0. && o->step_control == PFVI_STEP_CONTROL_SYMMETRIC);
-    const int need_partner = (fitted && (o->centre == PFVI_CENTRE_PARTNER || o->frequency == PFVI_FREQUENCY_MEAN_MOTION));
+    // (The s-point stage solve's Newton rounds correct each body with its partner's pull.)
+    const int need_partner = (fitted && (o->centre == PFVI_CENTRE_PARTNER || o->frequency == PFVI_FREQUENCY_MEAN_MOTION))
+        || o->stages > 2;
     // The partners (and for the symmetric control the density) at the start:
     // those the last step found at its end if this step starts there.
     st->density_N = 0;  // valid again only once a symmetric step has found it at its end
@@ -629,8 +645,9 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
             }
         }
     }
+    const int centre_partner = (fitted && (o->centre == PFVI_CENTRE_PARTNER || o->frequency == PFVI_FREQUENCY_MEAN_MOTION));
     pfvi_centres(p0, e, N, r->N_active, (r->gravity == REB_GRAVITY_NONE) ? 0. : r->G,
-            fitted ? o->centre : PFVI_CENTRE_ORIGIN, need_partner ? st->partners : NULL, st->centre);
+            fitted ? o->centre : PFVI_CENTRE_ORIGIN, centre_partner ? st->partners : NULL, st->centre);
     for (size_t i=0; !fitted && i<N; i++){
         st->omega_fit[i] = 0.;
     }

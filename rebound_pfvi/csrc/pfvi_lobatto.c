@@ -167,3 +167,17 @@ int pfvi_lobatto_compute(int s, struct pfvi_lobatto* rule){
     nystrom_form(s, x, rule);
     return 1;
 }
+
+void pfvi_lagrange_at(const struct pfvi_lobatto* rule, double tau, double* l){
+    // l_m(tau) = lagrange[m] (prod_(n < m) (tau - c^n)) (prod_(n > m) (tau - c^n)).
+    const int s = rule->s;
+    double below[PFVI_STAGES_MAX], above = 1.;
+    below[0] = 1.;
+    for (int n=1; n<s; n++){
+        below[n] = below[n-1]*(tau - rule->c[n-1]);
+    }
+    for (int m=s-1; m>=0; m--){
+        l[m] = rule->lagrange[m]*(below[m]*above);
+        above *= tau - rule->c[m];
+    }
+}

@@ -25,6 +25,7 @@
  */
 #include <float.h>
 #include <math.h>
+#include <string.h>
 #include "pfvi.h"
 
 // A variational particle's tangent step is its real particle's step with the
@@ -214,7 +215,8 @@ static void stage_velocity_times_h(const struct pfvi_stage_fit* f, const struct 
 // the same calls (REBOUND computes their forces beside the real ones); with
 // real = 0 only theirs are kept (the real particles placed at the same
 // stage points as before, their stage values left as they are).
-static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h, int real){
+static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h, int real,
+        int k_first, int k_last){
     const struct pfvi_lobatto* const rule = &st->rule;
     const int s = rule->s;
     const int vdep = r->force_is_velocity_dependent;
@@ -235,7 +237,7 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
             }
         }
     }
-    for (int k=vdep ? 0 : 1; k<s; k++){
+    for (int k=(vdep && k_first <= 1) ? 0 : k_first; k<=k_last; k++){
         for (size_t v=0; v<nv; v++){
             double x[3];
             stage_position(&st->stage_fit[st->var_real[v]], &st->var_stage_start[v], &var_compensation,
@@ -289,8 +291,11 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
 // First iterate of the stage accelerations, along an interpolating
 // polynomial of converged ones: those of the last trial of this same step
 // (a trial the step control rejected, or retries at another h), or else the
-// last step's, extrapolated; without either, the start acceleration at every node.
-static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
+// last step's, extrapolated; without either, the start acceleration at every
+// node. Returns which (the classical form starts from a retry's, otherwise
+// from the two-body predictor of pfvi_solve.c, which extrapolates only the
+// forces beyond each body's partner, from the last step's stages).
+static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
     const struct pfvi_lobatto* const rule = &st->rule;
     const int s = rule->s;
     // Extrapolated over more than a few of the source's lengths (a step
@@ -306,19 +311,9 @@ static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
         // x[j][m] = l_m(tau_j): the Lagrange basis of the source's nodes at
         // this step's, in units of the source's step (which starts at t0 for
         // a retry, and ends there for the last step).
-        // l_m(tau) = lagrange[m] (prod_(n < m) (tau - c^n)) (prod_(n > m) (tau - c^n)).
         const double rho = h/(retry ? st->retry_h : st->predictor_h);
         for (int j=0; j<s; j++){
-            const double tau = (retry ? 0. : 1.) + rho*rule->c[j];
-            double below[PFVI_STAGES_MAX], above = 1.;
-            below[0] = 1.;
-            for (int n=1; n<s; n++){
-                below[n] = below[n-1]*(tau - rule->c[n-1]);
-            }
-            for (int m=s-1; m>=0; m--){
-                x[j][m] = rule->lagrange[m]*(below[m]*above);
-                above *= tau - rule->c[m];
-            }
+            pfvi_lagrange_at(rule, (retry ? 0. : 1.) + rho*rule->c[j], x[j]);
         }
     }
     const struct reb_particle* const p0 = st->start;
@@ -389,8 +384,54 @@ static void stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
             }
         }
     }
+    return retry ? PFVI_PREDICTED_RETRY : (extrapolate ? PFVI_PREDICTED_EXTRAPOLATED : PFVI_PREDICTED_NONE);
 }
 
+
+// The classical form's linear structure for the solve (pfvi_solve.c):
+// Q^i = q_k + y[i-1] with y[i-1] = c_nu[i] h v_k + h^2 sum_j nu[i][j] w_j A^j,
+// so S[i-1][j] = -h^2 nu[i][j] w_j; the forces of stages 1 .. s-2 act within
+// the step (nu's last column is zero; stage 0 is the fixed start).
+static void classical_form(const struct pfvi_lobatto* rule, double h, struct pfvi_solve_form* f){
+    const int s = rule->s, m = s - 1;
+    memset(f, 0, sizeof(*f));
+    f->m = m;
+    f->k_last = s - 2;
+    f->increment = s - 2;
+    f->fscale = 1.;
+    for (int l=0; l<m; l++){
+        for (int k=1; k<=s-2; k++){
+            f->S[l][k] = -h*h*rule->nu[l+1][k]*rule->w[k];
+        }
+    }
+    for (int k=1; k<s; k++){
+        f->X[k][k-1] = 1.;
+    }
+}
+
+// A fitted particle's: y = yc - solve F with F_k = h^2 (a_k - the centre's)
+// + u2 (d_k - ...), stage k at q_k + (base_k + bbar_k y[0] + y[k] + shift_k)
+// inside the step and q_k + (y[0] + shift) at its end.
+static void fitted_form(const struct pfvi_lobatto* rule, const struct pfvi_stage_fit* fit, double h,
+        struct pfvi_solve_form* f){
+    const int s = rule->s, m = s - 1;
+    memset(f, 0, sizeof(*f));
+    f->m = m;
+    f->k_last = s - 1;
+    f->increment = 0;
+    f->fscale = h*h;
+    f->u2 = fit->u2;
+    for (int l=0; l<m; l++){
+        for (int k=1; k<s; k++){
+            f->S[l][k] = fit->solve[l][k];
+        }
+    }
+    for (int k=1; k<s-1; k++){
+        f->X[k][0] = fit->bbar[k];
+        f->X[k][k] = 1.;
+    }
+    f->X[s-1][0] = 1.;
+}
 
 static int stages_prepare(struct pfvi_state* st, double h){
     if (st->rule.s != st->options.stages){
@@ -403,6 +444,7 @@ static int stages_prepare(struct pfvi_state* st, double h){
         st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_UNDERFLOW, .h = h, .n = (size_t)st->rule.s};
         return 0;
     }
+    classical_form(&st->rule, h, &st->solve_form_classical);
     return 1;
 }
 
@@ -410,13 +452,23 @@ static enum pfvi_fit_status stages_fit(struct pfvi_state* st, size_t i, double o
     if (omega == 0.){
         // u = 0: the classical coefficients, the same at every step.
         st->stage_fit[i] = st->stage_classical;
+        st->solve_form[i] = &st->solve_form_classical;
         return PFVI_FIT_OK;
     }
-    return pfvi_stage_fit(&st->rule, omega, h, st->options.u_max, st->options.fitting, &st->stage_fit[i]);
+    const enum pfvi_fit_status status = pfvi_stage_fit(&st->rule, omega, h, st->options.u_max, st->options.fitting,
+            &st->stage_fit[i]);
+    if (st->stage_fit[i].classical){
+        st->solve_form[i] = &st->solve_form_classical;
+    }else{
+        fitted_form(&st->rule, &st->stage_fit[i], h, &st->solve_forms[i]);
+        st->solve_form[i] = &st->solve_forms[i];
+    }
+    return status;
 }
 
 static void stages_copy_fit(struct pfvi_state* st, size_t i, size_t from){
     st->stage_fit[i] = st->stage_fit[from];
+    st->solve_form[i] = st->solve_form[from];
 }
 
 static double stages_fitted_omega(const struct pfvi_state* st, size_t i){
@@ -480,33 +532,13 @@ static void var_round(struct pfvi_state* st, size_t v, int s, double h, const do
     }
 }
 
-// One particle's largest change of its unknowns between two iterates,
-// relative to the larger of its start position and its step's increment
-// (unknown `increment`). Written so that a NaN makes the change NaN, not 0.
-static inline double unknowns_change(const double (*y)[3], const double (*yn)[3], const double* q0,
-        int increment, int s){
-    double scale = 0., diff = 0.;
-    for (int c=0; c<3; c++){
-        const double q = fabs(q0[c]), d = fabs(y[increment][c]);
-        scale = (q > scale) ? q : scale;
-        scale = (d > scale) ? d : scale;
-    }
-    for (int j=0; j<s-1; j++){
-        for (int c=0; c<3; c++){
-            const double d = fabs(yn[j][c] - y[j][c]);
-            diff = (d > diff || d != d) ? d : diff;
-        }
-    }
-    return (scale > 0.) ? diff/scale : diff;
-}
-
 // The largest relative change of the variational particles' unknowns in a
 // round, measured as the real solve measures its own (a NaN is kept).
 static double var_change(const struct pfvi_state* st, int s){
     double change = 0.;
     for (size_t v=0; v<st->var_N; v++){
         const int increment = st->stage_fit[st->var_real[v]].classical ? s - 2 : 0;
-        const double relative = unknowns_change((const double (*)[3])st->var_unknowns[v],
+        const double relative = pfvi_solve_change((const double (*)[3])st->var_unknowns[v],
                 (const double (*)[3])st->var_unknowns_next[v], st->var_stage_start[v].q0, increment, s);
         change = (relative > change || relative != relative) ? relative : change;
     }
@@ -573,7 +605,7 @@ static int stages_advance_variational(struct reb_simulation* r, struct pfvi_stat
         double (*swap)[PFVI_STAGES_MAX-1][3] = st->var_unknowns;
         st->var_unknowns = st->var_unknowns_next;
         st->var_unknowns_next = swap;
-        if (!stage_forces(r, st, N, t0, h, 0)){
+        if (!stage_forces(r, st, N, t0, h, 0, 1, s - 1)){
             return 0;
         }
         rounds++;
@@ -665,6 +697,76 @@ static int stages_advance_variational(struct reb_simulation* r, struct pfvi_stat
     return 1;
 }
 
+// One round for every real and variational particle: unknowns_next from
+// the forces at the stage points of unknowns; the variational particles'
+// change is kept for their own verdict (they never enter the real one).
+static void stage_rounds(struct pfvi_state* st, size_t N, double h){
+    const struct pfvi_lobatto* const rule = &st->rule;
+    const int s = rule->s;
+    // The classical form's h w_j: the same products in every round and in
+    // the update, so that the doubles' step is the IIIA-IIIB pair exactly.
+    double hb[PFVI_STAGES_MAX];
+    for (int j=0; j<s; j++){
+        hb[j] = h*rule->w[j];
+    }
+    for (size_t i=0; i<N; i++){
+        if (st->stage_fit[i].classical){
+            classical_round(rule, &st->stage_start[i], h, hb, (const double (*)[3])st->stage_a[i],
+                    st->unknowns_next[i]);
+        }else{
+            stage_round(&st->stage_fit[i], &st->stage_start[i], &st->centre[i], s, h,
+                    (const double (*)[3])st->stage_a[i], (const double (*)[3])st->stage_x[i], st->unknowns_next[i]);
+        }
+    }
+    if (st->var_N){
+        for (size_t v=0; v<st->var_N; v++){
+            var_round(st, v, s, h, hb);
+        }
+        st->var_solve_previous = st->var_solve_change;
+        st->var_solve_change = var_change(st, s);
+    }
+}
+
+static int stage_solve_forces(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
+        int k_first, int k_last){
+    return stage_forces(r, st, N, t0, h, 1, k_first, k_last);
+}
+
+// The stage points of the iterate unknowns, for the solve's Jacobians.
+static void stage_solve_positions(struct pfvi_state* st, size_t N, double h){
+    (void)h;
+    const int s = st->rule.s;
+    for (size_t i=0; i<N; i++){
+        for (int k=1; k<s; k++){
+            stage_position(&st->stage_fit[i], &st->stage_start[i], &st->compensation[i],
+                    (const double (*)[3])st->unknowns[i], s, k, st->solve_x[i][k]);
+        }
+    }
+}
+
+// The classical form's unknowns are its stage points less the start.
+static void stage_solve_start_at(struct pfvi_state* st, size_t N){
+    const int s = st->rule.s;
+    for (size_t i=0; i<N; i++){
+        if (!st->stage_fit[i].classical){
+            continue;
+        }
+        const double* const q0 = st->stage_start[i].q0;
+        for (int k=1; k<s; k++){
+            for (int c=0; c<3; c++){
+                st->unknowns[i][k-1][c] = st->solve_x[i][k][c] - q0[c];
+            }
+        }
+    }
+}
+
+static const struct pfvi_solve_ops stage_solve_ops = {
+    .forces = stage_solve_forces,
+    .round = stage_rounds,
+    .positions = stage_solve_positions,
+    .start_at = stage_solve_start_at,
+};
+
 static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){
     const struct pfvi_lobatto* const rule = &st->rule;
     const int s = rule->s;
@@ -678,7 +780,7 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
     for (size_t v=0; v<nv; v++){
         stage_start_of(rule, &st->stage_fit[st->var_real[v]], &st->var_start[v], &var_centre, h, &st->var_stage_start[v]);
     }
-    stage_predict(st, N, t0, h);
+    const int predicted = stage_predict(st, N, t0, h);
     // The classical form's h w_j: the same products in every round and in
     // the update, so that the doubles' step is the IIIA-IIIB pair exactly.
     double hb[PFVI_STAGES_MAX];
@@ -686,57 +788,17 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
         hb[j] = h*rule->w[j];
     }
 
-    // Fixed-point iteration; `unknowns` is the iterate at which the forces
-    // in stage_a were evaluated (after the first round). The variational
-    // particles' tangent solve runs in the same rounds; neither its changes
-    // nor anything else of theirs enters the real solve's verdict.
-    double previous = INFINITY, change = INFINITY;
-    double var_previous = INFINITY, var_changed = INFINITY;
-    int rounds = 0, converged = 0;
-    for (int iteration=0; iteration<=PFVI_ITERATION_MAX; iteration++){
-        for (size_t i=0; i<N; i++){
-            if (st->stage_fit[i].classical){
-                classical_round(rule, &st->stage_start[i], h, hb, (const double (*)[3])st->stage_a[i],
-                        st->unknowns_next[i]);
-            }else{
-                stage_round(&st->stage_fit[i], &st->stage_start[i], &st->centre[i], s, h,
-                        (const double (*)[3])st->stage_a[i], (const double (*)[3])st->stage_x[i], st->unknowns_next[i]);
-            }
-        }
-        for (size_t v=0; v<nv; v++){
-            var_round(st, v, s, h, hb);
-        }
-        if (iteration > 0){
-            var_changed = var_change(st, s);
-            change = 0.;
-            for (size_t i=0; i<N; i++){
-                const int increment = st->stage_fit[i].classical ? s - 2 : 0;
-                const double relative = unknowns_change((const double (*)[3])st->unknowns[i],
-                        (const double (*)[3])st->unknowns_next[i], st->stage_start[i].q0, increment, s);
-                change = (relative > change || relative != relative) ? relative : change;
-            }
-            const enum pfvi_iteration verdict = pfvi_iteration_verdict(change, previous,
-                    iteration == PFVI_ITERATION_MAX);
-            if (verdict != PFVI_ITERATE){
-                converged = (verdict == PFVI_CONVERGED);
-                break;
-            }
-        }
-        double (*swap)[PFVI_STAGES_MAX-1][3] = st->unknowns;
-        st->unknowns = st->unknowns_next;
-        st->unknowns_next = swap;
-        swap = st->var_unknowns;
-        st->var_unknowns = st->var_unknowns_next;
-        st->var_unknowns_next = swap;
-        if (!stage_forces(r, st, N, t0, h, 1)){
-            return PFVI_TRIAL_ERROR;
-        }
-        rounds++;
-        previous = (iteration == 0) ? INFINITY : change;
-        var_previous = (iteration == 0) ? INFINITY : var_changed;
+    // The first iterate: one round from the predicted accelerations.
+    stage_rounds(st, N, h);
+    pfvi_solve_swap(st);
+    st->var_solve_change = INFINITY;
+    st->var_solve_previous = INFINITY;
+    const enum pfvi_trial solved = pfvi_solve_stages(r, st, N, t0, h, &stage_solve_ops, predicted);
+    if (solved == PFVI_TRIAL_ERROR){
+        return PFVI_TRIAL_ERROR;
     }
-    st->trial.rounds = (uint64_t)rounds;
-    st->trial.change = change;
+    const int converged = (solved == PFVI_TRIAL_OK);
+    const int rounds = (int)st->trial.rounds;
     // A retry of this step from t0 starts from these stages if they converged.
     st->retry_valid = converged && st->retry_allowed;
     st->retry_t0 = t0;
@@ -803,7 +865,7 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
         // Kept in dv until the step is known to be taken.
         st->dv[i] = (struct reb_vec3d){inc_v[0], inc_v[1], inc_v[2]};
     }
-    if (nv && !stages_advance_variational(r, st, N, t0, h, hb, var_changed, var_previous, rounds)){
+    if (nv && !stages_advance_variational(r, st, N, t0, h, hb, st->var_solve_change, st->var_solve_previous, rounds)){
         return PFVI_TRIAL_ERROR;
     }
     r->t = t0 + h;

@@ -38,6 +38,13 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->unknowns_next);
     free(st->velocities);
     free(st->stage_start);
+    free(st->solve_form);
+    free(st->solve_forms);
+    free(st->solve_x);
+    free(st->newton);
+    free(st->newton_order);
+    free(st->newton_index);
+    free(st->newton_mark);
     free(st->origin);
     free(st->var_real);
     free(st->var_start);
@@ -107,6 +114,13 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->unknowns_next = pfvi_grow(st->unknowns_next, N*sizeof(*st->unknowns_next), &ok);
     st->velocities = pfvi_grow(st->velocities, N*sizeof(*st->velocities), &ok);
     st->stage_start = pfvi_grow(st->stage_start, N*sizeof(*st->stage_start), &ok);
+    st->solve_form = pfvi_grow(st->solve_form, N*sizeof(*st->solve_form), &ok);
+    st->solve_forms = pfvi_grow(st->solve_forms, N*sizeof(*st->solve_forms), &ok);
+    st->solve_x = pfvi_grow(st->solve_x, N*sizeof(*st->solve_x), &ok);
+    st->newton = pfvi_grow(st->newton, N*sizeof(*st->newton), &ok);
+    st->newton_order = pfvi_grow(st->newton_order, N*sizeof(*st->newton_order), &ok);
+    st->newton_index = pfvi_grow(st->newton_index, N*sizeof(*st->newton_index), &ok);
+    st->newton_mark = pfvi_grow(st->newton_mark, N*sizeof(*st->newton_mark), &ok);
     if (st->predictor_N > N){
         // Only after a Simulationarchive load with fewer particles: the buffer
         // now holds N; an archive must never write more than it holds.

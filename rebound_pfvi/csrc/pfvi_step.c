@@ -52,6 +52,7 @@ enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* st,
     st->trial.variational_unconverged = 0;
     st->trial.megno_dY = 0.;
     st->trial.megno_Y_integral = 0.;
+    st->trial.solve_recovered = 0;
     if (!scheme->prepare(st, h)){
         pfvi_roll_back(r, st, N, t0);
         return PFVI_TRIAL_ERROR;
@@ -115,6 +116,7 @@ void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* st, size_t N,
     stats->n_u_limited += st->trial.n_limited;
     stats->n_variational_evaluations += st->trial.variational_evaluations;
     stats->n_variational_unconverged += (uint64_t)st->trial.variational_unconverged;
+    stats->n_solve_recovered += (uint64_t)st->trial.solve_recovered;
     stats->omega_min = st->trial.omega_min;
     stats->omega_max = st->trial.omega_max;
 }

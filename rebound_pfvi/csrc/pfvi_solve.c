@@ -1,0 +1,824 @@
+/**
+ * pfvi_solve.c: the stage solve. A step's stage equations (pfvi_stages.c,
+ * either form) are R(y) = y - G(y) = 0 in the unknowns y (m = s - 1 rows of
+ * 3 components per particle), where a round y -> G(y) evaluates the forces
+ * at the stage points x(y) and solves the equations' linear part for them:
+ *     G(y) = yc - S F(x(y)),   x_k(y) = base_k + sum_l X[k][l] y_l,
+ * S (m x s) the forces' weights and X (s x m) the stages' dependence on the
+ * unknowns (struct pfvi_solve_form, one per distinct fit), F_k the force the
+ * round carries at stage k (fscale a_k, plus u2 d_k for the fitting "exact").
+ *
+ * Rather than iterating G (a fixed point whose contraction is about the
+ * step's kappa, 7-9 rounds at the defaults), each round is corrected by
+ * Newton's method with each body's dominant coupling only: the tidal tensor
+ * of its partner, dA/dx = alpha (3 n n^T - I), alpha = mu/r^3, evaluated at
+ * every stage of the first iterate (one factorisation per step). Mutual
+ * partners (a binary, a star and its closest planet) are corrected in their
+ * relative coordinate with mu = G (m_i + m_j), their barycentre by the plain
+ * round; every other body after its partner, with the partner's correction
+ * on its right-hand side. The per-body matrix
+ *     M = I + S diag(g) X (x) I_3 + sum_k d_k (S e_k (x) n_k)(X^T e_k (x) n_k)^T
+ * (g_k = u2 - fscale alpha_k, d_k = 3 fscale alpha_k) is an isotropic part
+ * Kronecker with I_3 plus one rank-one term per stage, solved by Woodbury's
+ * identity: an m x m and a K x K factorisation per step (K the stages whose
+ * force enters), about 700 flops per round and body at s = 8.
+ *
+ * The residual G(y) - y of each round is the exact one: the partner model
+ * changes only how fast the iterates converge, never what they converge to.
+ *
+ * The rounds stop by the measured rate (pfvi_solve_verdict): with theta the
+ * ratio of the last two corrections, once theta/(1 - theta) times the last
+ * correction is below the doubles' resolution, the corrected iterate is
+ * taken through one final round, which must confirm it; a change that grows
+ * refreshes the Jacobians at the current iterate, and grows again, drops
+ * them for the plain round (counted in n_solve_recovered). docs/solve.md.
+ */
+#include <float.h>
+#include <math.h>
+#include <string.h>
+#include "pfvi.h"
+
+/* ---------------------------------------------------------- small LU */
+
+// LU factorisation with partial pivoting of the n x n matrix A (row
+// stride PFVI_STAGES_MAX) in place; 0 if a pivot is zero or not finite.
+static int lu_factor(int n, double A[][PFVI_STAGES_MAX], int* piv){
+    for (int k=0; k<n; k++){
+        int p = k;
+        for (int i=k+1; i<n; i++){
+            p = (fabs(A[i][k]) > fabs(A[p][k])) ? i : p;
+        }
+        piv[k] = p;
+        if (p != k){
+            for (int j=0; j<n; j++){
+                const double t = A[k][j]; A[k][j] = A[p][j]; A[p][j] = t;
+            }
+        }
+        if (!(A[k][k] != 0.) || !isfinite(A[k][k])){
+            return 0;
+        }
+        const double inv = 1./A[k][k];
+        for (int i=k+1; i<n; i++){
+            const double g = A[i][k]*inv;
+            A[i][k] = g;
+            for (int j=k+1; j<n; j++){
+                A[i][j] -= g*A[k][j];
+            }
+        }
+    }
+    return 1;
+}
+
+// Solves with lu_factor's factors, 3 right-hand sides b[0..n-1][c] in place.
+static void lu_solve3(int n, const double A[][PFVI_STAGES_MAX], const int* piv, double (*b)[3]){
+    for (int k=0; k<n; k++){
+        if (piv[k] != k){
+            for (int c=0; c<3; c++){
+                const double t = b[k][c]; b[k][c] = b[piv[k]][c]; b[piv[k]][c] = t;
+            }
+        }
+        for (int i=k+1; i<n; i++){
+            for (int c=0; c<3; c++){
+                b[i][c] -= A[i][k]*b[k][c];
+            }
+        }
+    }
+    for (int k=n-1; k>=0; k--){
+        for (int c=0; c<3; c++){
+            double sum = b[k][c];
+            for (int j=k+1; j<n; j++){
+                sum -= A[k][j]*b[j][c];
+            }
+            b[k][c] = sum/A[k][k];
+        }
+    }
+}
+
+// The same for one right-hand side.
+static void lu_solve1(int n, const double A[][PFVI_STAGES_MAX], const int* piv, double* b){
+    for (int k=0; k<n; k++){
+        if (piv[k] != k){
+            const double t = b[k]; b[k] = b[piv[k]]; b[piv[k]] = t;
+        }
+        for (int i=k+1; i<n; i++){
+            b[i] -= A[i][k]*b[k];
+        }
+    }
+    for (int k=n-1; k>=0; k--){
+        double sum = b[k];
+        for (int j=k+1; j<n; j++){
+            sum -= A[k][j]*b[j];
+        }
+        b[k] = sum/A[k][k];
+    }
+}
+
+/* ------------------------------------------- Newton with the partner's pull */
+
+// One body's (or one mutual pair's relative) Newton matrix at the stages of
+// the first iterate, factorised for Woodbury's identity.
+static int newton_factor(const struct pfvi_solve_form* f, const double (*n)[3], const double* alpha,
+        struct pfvi_newton* u){
+    const int m = f->m, K = f->k_last;
+    double g[PFVI_STAGES_MAX];
+    for (int k=1; k<=K; k++){
+        g[k] = f->u2 - f->fscale*alpha[k];
+        u->d[k] = 3.*f->fscale*alpha[k];
+        u->gc[k] = -f->fscale*alpha[k];
+        u->n[k][0] = n[k][0]; u->n[k][1] = n[k][1]; u->n[k][2] = n[k][2];
+    }
+    // P = I + S diag(g) X; Q = P^-1 S (columns 1 .. K).
+    for (int l=0; l<m; l++){
+        for (int j=0; j<m; j++){
+            double sum = (l == j) ? 1. : 0.;
+            for (int k=1; k<=K; k++){
+                sum += f->S[l][k]*g[k]*f->X[k][j];
+            }
+            u->P[l][j] = sum;
+        }
+    }
+    if (!lu_factor(m, u->P, u->Ppiv)){
+        return 0;
+    }
+    for (int k=1; k<=K; k++){
+        double col[PFVI_STAGES_MAX];
+        for (int l=0; l<m; l++){
+            col[l] = f->S[l][k];
+        }
+        lu_solve1(m, (const double (*)[PFVI_STAGES_MAX])u->P, u->Ppiv, col);
+        for (int l=0; l<m; l++){
+            u->Q[l][k] = col[l];
+        }
+    }
+    // C = I + [d_k' (X Q)[k][k'] (n_k . n_k')], stages 1 .. K as rows 0 .. K-1.
+    for (int k=1; k<=K; k++){
+        for (int kk=1; kk<=K; kk++){
+            double H = 0.;
+            for (int l=0; l<m; l++){
+                H += f->X[k][l]*u->Q[l][kk];
+            }
+            const double nn = n[k][0]*n[kk][0] + n[k][1]*n[kk][1] + n[k][2]*n[kk][2];
+            u->C[k-1][kk-1] = ((k == kk) ? 1. : 0.) + u->d[kk]*H*nn;
+        }
+    }
+    return lu_factor(K, u->C, u->Cpiv);
+}
+
+// b <- M^-1 b for a factorised unit (b: m rows of 3).
+static void newton_apply(const struct pfvi_solve_form* f, const struct pfvi_newton* u, double (*b)[3]){
+    const int m = f->m, K = f->k_last;
+    lu_solve3(m, (const double (*)[PFVI_STAGES_MAX])u->P, u->Ppiv, b);
+    double t[PFVI_STAGES_MAX];
+    for (int k=1; k<=K; k++){
+        double xi[3] = {0., 0., 0.};
+        for (int l=0; l<m; l++){
+            const double X = f->X[k][l];
+            xi[0] += X*b[l][0]; xi[1] += X*b[l][1]; xi[2] += X*b[l][2];
+        }
+        t[k-1] = u->n[k][0]*xi[0] + u->n[k][1]*xi[1] + u->n[k][2]*xi[2];
+    }
+    lu_solve1(K, (const double (*)[PFVI_STAGES_MAX])u->C, u->Cpiv, t);
+    for (int k=1; k<=K; k++){
+        const double tau = t[k-1]*u->d[k];
+        for (int l=0; l<m; l++){
+            const double q = tau*u->Q[l][k];
+            b[l][0] -= q*u->n[k][0]; b[l][1] -= q*u->n[k][1]; b[l][2] -= q*u->n[k][2];
+        }
+    }
+}
+
+// Adds to b the partner's correction as it acts on this body:
+// S [fscale J_k dx_p,k]_k, dx_p the partner's stage displacements.
+static void newton_cross(const struct pfvi_solve_form* f, const struct pfvi_newton* u,
+        const struct pfvi_solve_form* fp, const double (*Dp)[3], double (*b)[3]){
+    const int m = f->m, K = f->k_last;
+    for (int k=1; k<=K; k++){
+        double dx[3] = {0., 0., 0.};
+        for (int l=0; l<fp->m; l++){
+            const double X = fp->X[k][l];
+            dx[0] += X*Dp[l][0]; dx[1] += X*Dp[l][1]; dx[2] += X*Dp[l][2];
+        }
+        const double nd = u->d[k]*(u->n[k][0]*dx[0] + u->n[k][1]*dx[1] + u->n[k][2]*dx[2]);
+        double J[3];
+        for (int c=0; c<3; c++){
+            J[c] = u->gc[k]*dx[c] + nd*u->n[k][c];
+        }
+        for (int l=0; l<m; l++){
+            const double S = f->S[l][k];
+            b[l][0] += S*J[0]; b[l][1] += S*J[1]; b[l][2] += S*J[2];
+        }
+    }
+}
+
+// What body i is corrected and predicted about: its partner p, or, where
+// p is one of a pair of mutual partners that i is not in and that is bound
+// more tightly than i is to p (a body about a binary, a planet about a star
+// and a closer planet), that pair's barycentre. Positions of the centre: (1 - w) (x_p + g) + w (x_q + g + g_pq)
+// with g the ghost image of i's partner and g_pq that of the pair's.
+struct centre_ref {
+    size_t p, q;        // q: SIZE_MAX for p alone
+    double w;           // m_q/(m_p + m_q)
+    double mass;        // m_p (+ m_q)
+    double g[3], gv[3]; // the partner's image
+    double gq[3], gqv[3];
+};
+
+static struct centre_ref centre_of(const struct pfvi_state* st, const struct pfvi_field* field, size_t i){
+    struct centre_ref c;
+    memset(&c, 0, sizeof(c));
+    c.p = st->newton[i].partner;
+    c.q = st->newton[i].companion;
+    const struct reb_vec6d* const g = &field->images[st->partners[i].image];
+    c.g[0] = g->x; c.g[1] = g->y; c.g[2] = g->z;
+    c.gv[0] = g->vx; c.gv[1] = g->vy; c.gv[2] = g->vz;
+    const double mp = st->start[c.p].m;
+    c.mass = mp;
+    if (c.q != SIZE_MAX){
+        const double mq = st->start[c.q].m;
+        const struct reb_vec6d* const gq = &field->images[st->partners[c.p].image];
+        c.gq[0] = gq->x; c.gq[1] = gq->y; c.gq[2] = gq->z;
+        c.gqv[0] = gq->vx; c.gqv[1] = gq->vy; c.gqv[2] = gq->vz;
+        c.mass = mp + mq;
+        c.w = mq/c.mass;
+    }
+    return c;
+}
+
+// The centre's point from per-body points X[body][k] (solve_x or the last step's stages).
+static void centre_point(const struct centre_ref* c, const double (*X)[PFVI_STAGES_MAX][3], int k, double out[3]){
+    for (int d=0; d<3; d++){
+        const double xp = X[c->p][k][d] + c->g[d];
+        out[d] = (c->q == SIZE_MAX) ? xp : (1. - c->w)*xp + c->w*(X[c->q][k][d] + c->g[d] + c->gq[d]);
+    }
+}
+
+// The centre at the step's start: position, velocity, acceleration.
+static void centre_start(const struct centre_ref* c, const struct pfvi_state* st, double x[3], double v[3], double a[3]){
+    const struct reb_particle* const pp = &st->start[c->p];
+    const double px[3] = {pp->x, pp->y, pp->z}, pv[3] = {pp->vx, pp->vy, pp->vz};
+    for (int d=0; d<3; d++){
+        x[d] = px[d] + c->g[d];
+        v[d] = pv[d] + c->gv[d];
+        a[d] = st->end[c->p].a[d];
+    }
+    if (c->q != SIZE_MAX){
+        const struct reb_particle* const pq = &st->start[c->q];
+        const double qx[3] = {pq->x, pq->y, pq->z}, qv[3] = {pq->vx, pq->vy, pq->vz};
+        for (int d=0; d<3; d++){
+            x[d] = (1. - c->w)*x[d] + c->w*(qx[d] + c->g[d] + c->gq[d]);
+            v[d] = (1. - c->w)*v[d] + c->w*(qv[d] + c->gv[d] + c->gqv[d]);
+            a[d] = (1. - c->w)*a[d] + c->w*st->end[c->q].a[d];
+        }
+    }
+}
+
+// The units of a step: each particle's kind, the pair its partner may be
+// in, and an order in which every body comes after what it is corrected
+// about (a cycle longer than a pair is cut where the chain closes: that
+// body then goes without its centre's correction).
+static void newton_order(struct pfvi_state* st, size_t N, const struct pfvi_field* field){
+    struct pfvi_newton* const nw = st->newton;
+    size_t* const order = st->newton_order;
+    unsigned char* const mark = st->newton_mark;   // 0: not placed, 1: on the chain, 2: placed
+    for (size_t i=0; i<N; i++){
+        const struct pfvi_partner* const pi = &st->partners[i];
+        const size_t p = pi->j;
+        nw[i].partner = p;
+        nw[i].companion = SIZE_MAX;
+        mark[i] = 0;
+        if (p == SIZE_MAX || !st->solve_form[i] || !st->solve_form[p]){
+            nw[i].kind = PFVI_NEWTON_NONE;
+        }else if (st->partners[p].j == i && st->partners[p].image == field->n_images - 1 - pi->image
+                && st->solve_form[i] == st->solve_form[p] && st->solve_form[i]->u2 == 0.){
+            nw[i].kind = (i < p) ? PFVI_NEWTON_PAIR : PFVI_NEWTON_MEMBER;
+        }else{
+            nw[i].kind = PFVI_NEWTON_SINGLE;
+        }
+    }
+    for (size_t i=0; i<N; i++){
+        const size_t p = nw[i].partner;
+        // (Only a pair bound more tightly than i is to p: i orbits it as a whole.)
+        if (nw[i].kind == PFVI_NEWTON_SINGLE && (nw[p].kind == PFVI_NEWTON_PAIR || nw[p].kind == PFVI_NEWTON_MEMBER)
+                && nw[p].partner != i && st->partners[p].stiffness > st->partners[i].stiffness
+                && st->start[p].m + st->start[nw[p].partner].m > 0.){
+            nw[i].companion = nw[p].partner;
+        }
+    }
+    size_t placed = 0;
+    size_t* const stack = st->newton_index;
+    for (size_t i=0; i<N; i++){
+        // Follow i's chain (its partner, a pair member's leader) to a placed
+        // body, a pair's leader or its end; place it from the far end.
+        size_t chain = 0, j = i;
+        while (mark[j] == 0){
+            mark[j] = 1;
+            stack[chain++] = j;
+            if (nw[j].kind != PFVI_NEWTON_SINGLE && nw[j].kind != PFVI_NEWTON_MEMBER){
+                break;
+            }
+            j = nw[j].partner;
+        }
+        while (chain > 0){
+            const size_t k = stack[--chain];
+            mark[k] = 2;
+            order[placed++] = k;
+        }
+    }
+    // From here on newton_index is each body's place in the order.
+    for (size_t o=0; o<N; o++){
+        st->newton_index[order[o]] = o;
+    }
+}
+
+// Whether body i's centre was placed before it (its correction and
+// predicted path are then known when i's are made).
+static int centre_first(const struct pfvi_state* st, const struct centre_ref* c, size_t i){
+    const size_t* const index = st->newton_index;
+    return index[c->p] < index[i] && (c->q == SIZE_MAX || index[c->q] < index[i]);
+}
+
+int pfvi_newton_prepare(struct pfvi_state* st, size_t N, const struct pfvi_field* field){
+    int factored = 1;
+    for (size_t i=0; i<N; i++){
+        struct pfvi_newton* const u = &st->newton[i];
+        if (u->kind == PFVI_NEWTON_NONE || u->kind == PFVI_NEWTON_MEMBER){
+            continue;
+        }
+        const size_t p = u->partner;
+        const struct pfvi_solve_form* const f = st->solve_form[i];
+        const int pair = (u->kind == PFVI_NEWTON_PAIR);
+        const struct centre_ref c = centre_of(st, field, i);
+        // A pair's relative coordinate feels G (m_i + m_p); a body its centre's G M.
+        const double mu = field->G*(pair ? st->start[i].m + st->start[p].m : c.mass);
+        double n[PFVI_STAGES_MAX][3], alpha[PFVI_STAGES_MAX];
+        for (int k=1; k<=f->k_last; k++){
+            double xc[3], r[3];
+            centre_point(&c, (const double (*)[PFVI_STAGES_MAX][3])st->solve_x, k, xc);
+            for (int d=0; d<3; d++){
+                r[d] = st->solve_x[i][k][d] - xc[d];
+            }
+            const double r2 = (r[0]*r[0] + r[1]*r[1] + r[2]*r[2]) + field->softening2;
+            const double inv = 1./sqrt(r2);
+            alpha[k] = mu*inv*inv*inv;
+            n[k][0] = r[0]*inv; n[k][1] = r[1]*inv; n[k][2] = r[2]*inv;
+            if (!isfinite(alpha[k]) || !isfinite(n[k][0] + n[k][1] + n[k][2])){
+                alpha[k] = 0.;
+                n[k][0] = n[k][1] = n[k][2] = 0.;
+            }
+        }
+        if (!newton_factor(f, (const double (*)[3])n, alpha, u)){
+            // (a step far beyond the pair's time scale): the plain round
+            u->kind = PFVI_NEWTON_NONE;
+            factored = 0;
+            if (pair){
+                st->newton[p].kind = PFVI_NEWTON_NONE;
+            }
+        }
+    }
+    return factored;
+}
+
+void pfvi_newton_correct(struct pfvi_state* st, size_t N, const double (*y)[PFVI_STAGES_MAX-1][3],
+        double (*yn)[PFVI_STAGES_MAX-1][3]){
+    const struct pfvi_newton* const nw = st->newton;
+    for (size_t o=0; o<N; o++){
+        const size_t i = st->newton_order[o];
+        const struct pfvi_newton* const u = &nw[i];
+        if (u->kind == PFVI_NEWTON_NONE || u->kind == PFVI_NEWTON_MEMBER){
+            continue;   // the plain round (members: with their pair)
+        }
+        const struct pfvi_solve_form* const f = st->solve_form[i];
+        const int m = f->m;
+        const size_t p = u->partner;
+        double b[PFVI_STAGES_MAX-1][3];
+        if (u->kind == PFVI_NEWTON_PAIR){
+            // Relative coordinate by Newton, barycentre by the round.
+            const double mi = st->start[i].m, mp = st->start[p].m, M = mi + mp;
+            for (int l=0; l<m; l++){
+                for (int c=0; c<3; c++){
+                    b[l][c] = (yn[i][l][c] - y[i][l][c]) - (yn[p][l][c] - y[p][l][c]);
+                }
+            }
+            newton_apply(f, u, b);
+            for (int l=0; l<m; l++){
+                for (int c=0; c<3; c++){
+                    const double bi = yn[i][l][c] - y[i][l][c], bp = yn[p][l][c] - y[p][l][c];
+                    const double cm = (mi*bi + mp*bp)/M;
+                    yn[i][l][c] = y[i][l][c] + (cm + (mp/M)*b[l][c]);
+                    yn[p][l][c] = y[p][l][c] + (cm - (mi/M)*b[l][c]);
+                }
+            }
+            continue;
+        }
+        for (int l=0; l<m; l++){
+            for (int c=0; c<3; c++){
+                b[l][c] = yn[i][l][c] - y[i][l][c];
+            }
+        }
+        if (st->newton_index[p] < st->newton_index[i]
+                && (u->companion == SIZE_MAX || st->newton_index[u->companion] < st->newton_index[i])){
+            // The centre's correction, final in this round: it was placed first.
+            // (Its bodies share one form when they are a pair; alone, p has its own.)
+            double Dc[PFVI_STAGES_MAX-1][3];
+            const struct pfvi_solve_form* const fp = st->solve_form[p];
+            const size_t q = u->companion;
+            const double w = (q == SIZE_MAX) ? 0. : st->start[q].m/(st->start[p].m + st->start[q].m);
+            for (int l=0; l<fp->m; l++){
+                for (int c=0; c<3; c++){
+                    const double dp = yn[p][l][c] - y[p][l][c];
+                    Dc[l][c] = (q == SIZE_MAX) ? dp : (1. - w)*dp + w*(yn[q][l][c] - y[q][l][c]);
+                }
+            }
+            newton_cross(f, u, fp, (const double (*)[3])Dc, b);
+        }
+        newton_apply(f, u, b);
+        for (int l=0; l<m; l++){
+            for (int c=0; c<3; c++){
+                yn[i][l][c] = y[i][l][c] + b[l][c];
+            }
+        }
+    }
+}
+
+/* ------------------------------------------------ the rounds and their stop */
+
+double pfvi_solve_change(const double (*y)[3], const double (*yn)[3], const double* q0, int increment, int s){
+    double scale = 0., diff = 0.;
+    for (int c=0; c<3; c++){
+        const double q = fabs(q0[c]), d = fabs(y[increment][c]);
+        scale = (q > scale) ? q : scale;
+        scale = (d > scale) ? d : scale;
+    }
+    for (int j=0; j<s-1; j++){
+        for (int c=0; c<3; c++){
+            const double d = fabs(yn[j][c] - y[j][c]);
+            diff = (d > diff || d != d) ? d : diff;
+        }
+    }
+    return (scale > 0.) ? diff/scale : diff;
+}
+
+// The largest relative change of the real particles' unknowns (a NaN is kept).
+static double change_of(const struct pfvi_state* st, size_t N){
+    const int s = st->rule.s;
+    double change = 0.;
+    for (size_t i=0; i<N; i++){
+        const double relative = pfvi_solve_change((const double (*)[3])st->unknowns[i],
+                (const double (*)[3])st->unknowns_next[i], st->stage_start[i].q0, st->solve_form[i]->increment, s);
+        change = (relative > change || relative != relative) ? relative : change;
+    }
+    return change;
+}
+
+enum pfvi_solve_next pfvi_solve_verdict(double change, double previous, int last_round){
+    if (!isfinite(change)){
+        return PFVI_SOLVE_FAILED;
+    }
+    if (change == 0.){
+        return PFVI_SOLVE_CONVERGED;
+    }
+    const double theta = change/previous;
+    if (theta >= 1.){
+        // Not falling: the round-off floor if it is there, else diverging.
+        return (change <= PFVI_ITERATION_TOLERANCE) ? PFVI_SOLVE_CONVERGED
+            : (last_round ? PFVI_SOLVE_FAILED : PFVI_SOLVE_DIVERGING);
+    }
+    if (last_round){
+        return (change <= PFVI_ITERATION_TOLERANCE) ? PFVI_SOLVE_CONVERGED : PFVI_SOLVE_FAILED;
+    }
+    // What the iterates still have to go after the correction just made, if
+    // they keep converging at theta: theta/(1 - theta) change.
+    return (isfinite(previous) && theta*change <= PFVI_SOLVE_RESOLUTION*(1. - theta))
+        ? PFVI_SOLVE_FINAL : PFVI_SOLVE_ITERATE;
+}
+
+void pfvi_solve_swap(struct pfvi_state* st){
+    double (*swap)[PFVI_STAGES_MAX-1][3] = st->unknowns;
+    st->unknowns = st->unknowns_next;
+    st->unknowns_next = swap;
+    swap = st->var_unknowns;
+    st->var_unknowns = st->var_unknowns_next;
+    st->var_unknowns_next = swap;
+}
+
+enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
+        const struct pfvi_solve_ops* ops, int predicted){
+    const int s = st->rule.s;
+    struct pfvi_field field;
+    if (!pfvi_field_of(r, st, &field)){
+        pfvi_roll_back(r, st, N, t0);
+        return PFVI_TRIAL_ERROR;
+    }
+    // The end stage's force acts on no stage of its own step (the classical
+    // form): it is evaluated once, at the accepted end.
+    int end_free = !r->force_is_velocity_dependent;
+    for (size_t i=0; end_free && i<N; i++){
+        end_free = (st->solve_form[i]->k_last < s - 1);
+    }
+    newton_order(st, N, &field);
+    if (predicted != PFVI_PREDICTED_RETRY){
+        pfvi_solve_predict(st, N, &field, h, predicted == PFVI_PREDICTED_EXTRAPOLATED);
+        ops->start_at(st, N);
+    }
+    ops->positions(st, N, h);
+    if (!pfvi_newton_prepare(st, N, &field)){
+        st->trial.solve_recovered = 1;
+    }
+    int rounds = 0, final = 0, newton = 1, diverged = 0, converged = 0, end_evaluated = 0;
+    double previous = INFINITY, change = INFINITY, residual = INFINITY;
+    for (;;){
+        const int k_last = (end_free && !final) ? s - 2 : s - 1;
+        if (!ops->forces(r, st, N, t0, h, 1, k_last)){
+            return PFVI_TRIAL_ERROR;
+        }
+        rounds++;
+        end_evaluated = (k_last == s - 1);
+        ops->round(st, N, h);
+        residual = change_of(st, N);
+        if (residual == 0. || (final && residual <= PFVI_SOLVE_CONFIRM)){
+            converged = 1;
+            break;
+        }
+        if (!isfinite(residual)){
+            break;
+        }
+        final = 0;
+        if (newton){
+            pfvi_newton_correct(st, N, (const double (*)[PFVI_STAGES_MAX-1][3])st->unknowns, st->unknowns_next);
+            change = change_of(st, N);
+        }else{
+            change = residual;
+        }
+        const enum pfvi_solve_next next = pfvi_solve_verdict(change, previous, rounds >= PFVI_ITERATION_MAX);
+        if (next == PFVI_SOLVE_FAILED){
+            break;
+        }
+        if (next == PFVI_SOLVE_CONVERGED && residual <= PFVI_ITERATION_TOLERANCE){
+            // At the round-off floor: the iterate the forces were evaluated at.
+            converged = 1;
+            break;
+        }
+        pfvi_solve_swap(st);
+        previous = change;
+        final = (next == PFVI_SOLVE_FINAL);
+        if (next == PFVI_SOLVE_DIVERGING){
+            // A growing change: the Jacobians afresh at this iterate, then
+            // the plain round; a third time, the solve has failed.
+            st->trial.solve_recovered = 1;
+            previous = INFINITY;
+            diverged++;
+            if (diverged == 1 && newton){
+                ops->positions(st, N, h);
+                pfvi_newton_prepare(st, N, &field);
+            }else if (diverged <= 2){
+                newton = 0;
+            }else{
+                break;
+            }
+        }
+    }
+    st->trial.rounds = (uint64_t)rounds;
+    st->trial.change = residual;
+    if (converged && !end_evaluated && !ops->forces(r, st, N, t0, h, s - 1, s - 1)){
+        return PFVI_TRIAL_ERROR;
+    }
+    return converged ? PFVI_TRIAL_OK : PFVI_TRIAL_NOT_CONVERGED;
+}
+
+/* -------------------------------------------------- the two-body predictor */
+
+// Stumpff's functions c0 .. c3 of x = beta s^2 (beta = 2 mu/r - v^2).
+static void stumpff(double x, double c[4]){
+    if (fabs(x) < 0.1){
+        // Series to x^6: below 1e-16 relative for |x| < 0.1.
+        c[3] = (1. - x/20.*(1. - x/42.*(1. - x/72.*(1. - x/110.*(1. - x/156.*(1. - x/210.))))))/6.;
+        c[2] = (1. - x/12.*(1. - x/30.*(1. - x/56.*(1. - x/90.*(1. - x/132.*(1. - x/182.))))))/2.;
+        c[1] = 1. - x*c[3];
+        c[0] = 1. - x*c[2];
+        return;
+    }
+    if (x > 0.){
+        const double r = sqrt(x);
+        c[0] = cos(r);
+        c[1] = sin(r)/r;
+    }else{
+        const double r = sqrt(-x);
+        c[0] = cosh(r);
+        c[1] = sinh(r)/r;
+    }
+    c[2] = (1. - c[0])/x;
+    c[3] = (1. - c[1])/x;
+}
+
+// The two-body drift of (r0, v0) about mu by dt in universal variables,
+// from the guess *s of the universal anomaly (0: none); 0 if Newton's method
+// on Kepler's equation did not converge (the caller then takes the Taylor path).
+static int kepler_drift(const double r0[3], const double v0[3], double mu, double dt, double* s_guess, double r[3]){
+    const double r0n = sqrt(r0[0]*r0[0] + r0[1]*r0[1] + r0[2]*r0[2]);
+    const double eta = r0[0]*v0[0] + r0[1]*v0[1] + r0[2]*v0[2];
+    const double beta = 2.*mu/r0n - (v0[0]*v0[0] + v0[1]*v0[1] + v0[2]*v0[2]);
+    if (!(r0n > 0.) || !(mu > 0.) || !isfinite(beta)){
+        return 0;
+    }
+    double s = (*s_guess != 0.) ? *s_guess : dt/r0n;
+    double c[4];
+    int converged = 0;
+    for (int it=0; it<PFVI_PREDICTOR_KEPLER_ITERATIONS; it++){
+        stumpff(beta*s*s, c);
+        const double G1 = s*c[1], G2 = s*s*c[2], G3 = s*s*s*c[3];
+        const double F = r0n*G1 + eta*G2 + mu*G3 - dt;
+        const double dF = r0n*c[0] + eta*G1 + mu*G2;   // the radius at s
+        const double ds = F/dF;
+        s -= ds;
+        if (!isfinite(s)){
+            return 0;
+        }
+        if (fabs(ds) <= 1e-14*fabs(s)){
+            converged = 1;
+            break;
+        }
+    }
+    if (!converged){
+        return 0;
+    }
+    stumpff(beta*s*s, c);
+    const double G2 = s*s*c[2], G3 = s*s*s*c[3];
+    const double f = 1. - mu*G2/r0n, g = dt - mu*G3;
+    for (int k=0; k<3; k++){
+        r[k] = f*r0[k] + g*v0[k];
+    }
+    *s_guess = s;
+    return 1;
+}
+
+// The two-body pull of the relative position r about mu (softened).
+static void kepler_pull(const double r[3], double mu, double softening2, double a[3]){
+    const double r2 = (r[0]*r[0] + r[1]*r[1] + r[2]*r[2]) + softening2;
+    const double f = -mu/(r2*sqrt(r2));
+    a[0] = f*r[0]; a[1] = f*r[1]; a[2] = f*r[2];
+}
+
+// What the predictor integrates beside the two-body orbit: at each stage
+// j < s - 1 of this step, the acceleration a body (or a pair's relative
+// coordinate, or its barycentre) feels beyond the pair's pull, extrapolated
+// from the last step's stages (basis: their Lagrange basis at this step's
+// nodes; NULL: held at its start value), and its integral over the step,
+// out[k] = h^2 sum_j nu[k][j] w_j rest_j (the classical form's stage
+// formula, exact for the polynomial the rest follows).
+static void rest_integral(const struct pfvi_state* st, const double (*basis)[PFVI_STAGES_MAX], double h,
+        const double rest0[3], const double (*rest_old)[3], double (*out)[3]){
+    const struct pfvi_lobatto* const rule = &st->rule;
+    const int s = rule->s;
+    double rest[PFVI_STAGES_MAX][3];
+    for (int c=0; c<3; c++){
+        rest[0][c] = rest0[c];
+    }
+    for (int j=1; j<s-1; j++){
+        for (int c=0; c<3; c++){
+            double sum = rest0[c];
+            if (basis){
+                sum = 0.;
+                for (int m=0; m<s; m++){
+                    sum += basis[j][m]*rest_old[m][c];
+                }
+            }
+            rest[j][c] = sum;
+        }
+    }
+    for (int k=1; k<s; k++){
+        for (int c=0; c<3; c++){
+            double sum = 0.;
+            for (int j=0; j<s-1; j++){
+                sum += rule->nu[k][j]*rule->w[j]*rest[j][c];
+            }
+            out[k][c] = h*h*sum;
+        }
+    }
+}
+
+// The path of body i over the step, as the predictor draws it: about its
+// partner along their two-body orbit plus the integral of the rest of its
+// acceleration; a mutual pair's relative orbit about their barycentre; the
+// start's motion under its extrapolated acceleration without a partner.
+static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, size_t i, double h,
+        const double (*basis)[PFVI_STAGES_MAX]){
+    const int s = st->rule.s;
+    const struct pfvi_newton* const u = &st->newton[i];
+    if (u->kind == PFVI_NEWTON_MEMBER){
+        return;   // drawn with its pair
+    }
+    const struct reb_particle* const pi = &st->start[i];
+    const double* const ai = st->end[i].a;
+    const double q0[3] = {pi->x, pi->y, pi->z}, v0[3] = {pi->vx, pi->vy, pi->vz};
+    double (*x)[3] = st->solve_x[i];
+    const size_t p = u->partner;
+    double rest_old[PFVI_STAGES_MAX][3], drift[PFVI_STAGES_MAX][3];
+    if (p == SIZE_MAX || !(field->G > 0.)){
+        if (basis){
+            memcpy(rest_old, st->predictor_a[i], sizeof(rest_old));
+        }
+        rest_integral(st, basis, h, ai, (const double (*)[3])rest_old, drift);
+        for (int k=1; k<s; k++){
+            const double t = st->rule.c[k]*h;
+            for (int c=0; c<3; c++){
+                x[k][c] = q0[c] + (t*v0[c] + drift[k][c]);
+            }
+        }
+        return;
+    }
+    const int pair = (u->kind == PFVI_NEWTON_PAIR);
+    const struct centre_ref cr = centre_of(st, field, i);
+    double xc0[3], vc0[3], ac0[3];
+    centre_start(&cr, st, xc0, vc0, ac0);
+    double r0[3], w0[3];
+    for (int c=0; c<3; c++){
+        r0[c] = q0[c] - xc0[c];
+        w0[c] = v0[c] - vc0[c];
+    }
+    const struct reb_particle* const pp = &st->start[p];
+    const double mp = pair ? pp->m : cr.mass;
+    const double M = pi->m + mp, mu = field->G*M;
+    double pull[3], rest0[3];
+    kepler_pull(r0, mu, field->softening2, pull);
+    for (int c=0; c<3; c++){
+        rest0[c] = (ai[c] - ac0[c]) - pull[c];
+    }
+    if (basis){
+        for (int m=0; m<s; m++){
+            double xc[3], r[3], a[3];
+            centre_point(&cr, (const double (*)[PFVI_STAGES_MAX][3])st->predictor_x, m, xc);
+            for (int c=0; c<3; c++){
+                r[c] = st->predictor_x[i][m][c] - xc[c];
+            }
+            kepler_pull(r, mu, field->softening2, a);
+            centre_point(&cr, (const double (*)[PFVI_STAGES_MAX][3])st->predictor_a, m, xc);
+            for (int c=0; c<3; c++){
+                // (centre_point adds the images' shifts: taken off again for an acceleration)
+                const double ac = xc[c] - (cr.g[c] + cr.w*cr.gq[c]);
+                rest_old[m][c] = (st->predictor_a[i][m][c] - ac) - a[c];
+            }
+        }
+    }
+    rest_integral(st, basis, h, rest0, (const double (*)[3])rest_old, drift);
+    double cm_drift[PFVI_STAGES_MAX][3], cm0[3], cmv[3];
+    if (pair){
+        double cma0[3], cma_old[PFVI_STAGES_MAX][3];
+        for (int c=0; c<3; c++){
+            cm0[c] = (pi->m*q0[c] + mp*xc0[c])/M;
+            cmv[c] = (pi->m*v0[c] + mp*vc0[c])/M;
+            cma0[c] = (pi->m*ai[c] + mp*ac0[c])/M;
+            for (int m=0; basis && m<s; m++){
+                cma_old[m][c] = (pi->m*st->predictor_a[i][m][c] + mp*st->predictor_a[p][m][c])/M;
+            }
+        }
+        rest_integral(st, basis, h, cma0, (const double (*)[3])cma_old, cm_drift);
+    }
+    const int drawn = centre_first(st, &cr, i);
+    double sk = 0.;
+    for (int k=1; k<s; k++){
+        const double t = st->rule.c[k]*h;
+        double r[3];
+        if (!kepler_drift(r0, w0, mu, t, &sk, r)){
+            for (int c=0; c<3; c++){
+                r[c] = r0[c] + t*(w0[c] + 0.5*t*pull[c]);
+            }
+            sk = 0.;
+        }
+        for (int c=0; c<3; c++){
+            r[c] += drift[k][c];
+        }
+        if (pair){
+            double (*xp)[3] = st->solve_x[p];
+            for (int c=0; c<3; c++){
+                const double cm = cm0[c] + (t*cmv[c] + cm_drift[k][c]);
+                x[k][c] = cm + (mp/M)*r[c];
+                xp[k][c] = (cm - (pi->m/M)*r[c]) - cr.g[c];
+            }
+        }else{
+            // About the centre's own predicted path (drawn first, unless a
+            // cycle of partners put it after: then its Taylor path).
+            double xc[3];
+            if (drawn){
+                centre_point(&cr, (const double (*)[PFVI_STAGES_MAX][3])st->solve_x, k, xc);
+            }
+            for (int c=0; c<3; c++){
+                const double centre = drawn ? xc[c] : xc0[c] + t*(vc0[c] + 0.5*t*ac0[c]);
+                x[k][c] = centre + r[c];
+            }
+        }
+    }
+}
+
+void pfvi_solve_predict(struct pfvi_state* st, size_t N, const struct pfvi_field* field, double h, int extrapolate){
+    // The last step's stages, in units of its length, at this step's nodes.
+    double basis[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
+    if (extrapolate){
+        const double rho = h/st->predictor_h;
+        for (int j=0; j<st->rule.s; j++){
+            pfvi_lagrange_at(&st->rule, 1. + rho*st->rule.c[j], basis[j]);
+        }
+    }
+    for (size_t o=0; o<N; o++){
+        predict_body(st, field, st->newton_order[o], h, extrapolate ? (const double (*)[PFVI_STAGES_MAX])basis : NULL);
+    }
+}
