@@ -175,6 +175,22 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 #define PFVI_RESOLUTION_MAX 3.
 #define PFVI_RESOLUTION_RETRIES 5
 #define PFVI_RESOLUTION_SLACK 2.0
+// Fixed steps (epsilon = 0) are checked as the symmetric steps are: the
+// error per orbit their stages imply (pfvi_resolution_error; for a fitted
+// step from the residual its fitted path does not carry). Above FIXED_WARN
+// REBOUND warns, once per simulation. That estimate is bounded (the leading
+// coefficient of s stage values is at most sum |w_k| times the largest; at
+// s = 8 it stays below 0.01 however long the step), and at s = 2 it runs 5 to
+// 25 times above the error measured on Kepler orbits: so a step is refused
+// not on it but on the density sigma of the symmetric control at the step's
+// two ends, measured (O(N N_active), twice) only where the stages' u exceeds
+// FIXED_GATE times the largest u stage values can give: |h| sigma above
+// FIXED_KAPPA_MAX is about an orbit of the fastest time scale per step
+// (measured on Kepler orbits, e = 0 ... 0.9, s = 4 ... 8: every step accepted
+// beyond it ended at least 0.3 of the orbit off within three steps).
+#define PFVI_FIXED_WARN 1e-2
+#define PFVI_FIXED_GATE 0.4
+#define PFVI_FIXED_KAPPA_MAX 6.3
 // The track's rho follows lambda sigma to within the lag of its update:
 // measured over every scene of benchmarks/step_control.py (s = 4 and 8,
 // epsilon 1e-6 and 1e-10), rho/(lambda sigma) lay in [0.30, 2.28]. The
@@ -467,11 +483,16 @@ PFVI_INTERNAL void pfvi_partner_search(const struct reb_particle* p, size_t N, c
 // Returns 0 (sigma = 0) if no body has a partner.
 PFVI_INTERNAL int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state* start, size_t N,
         const struct pfvi_field* f, int s, struct pfvi_partner* partners, double* sigma, double* dlog_sigma);
-// How well a step's s stages resolve one particle's acceleration: |D|/A, D
-// the leading coefficient of the polynomial through the stage accelerations
-// a[k] (weights: the barycentric weights of the nodes on [0, 1]) and A the
-// largest |a[k]|; 0 if every a[k] is 0.
-PFVI_INTERNAL double pfvi_stage_resolution(const double (*a)[3], const double* weights, int s);
+// How well a step's s stages resolve one particle's force: |D|/A, D the
+// leading coefficient of the polynomial through the values f[k] (the stage
+// accelerations, or what a fitted step's quadrature carries of them;
+// weights: the barycentric weights of the nodes on [0, 1]) and A the largest
+// of the |a[k]| and scale2^(1/2); 0 if that is 0.
+PFVI_INTERNAL double pfvi_stage_resolution(const double (*f)[3], const double (*a)[3], const double* weights, int s,
+        double scale2);
+// The square of the largest single pull G m_j/r^2 (softened; every
+// attracting body j != i and ghost image) on particle i of p; 0 without gravity.
+PFVI_INTERNAL double pfvi_largest_pull2(const struct reb_particle* p, size_t N, const struct pfvi_field* f, size_t i);
 // Inspection (tests): each particle's partner in the simulation as it stands
 // (out[i] = N: none); 0 if memory ran out.
 PFVI_API int pfvi_partners(struct reb_simulation* r, size_t* out);
@@ -607,6 +628,8 @@ enum pfvi_fault_kind {
     PFVI_FAULT_UNSTABLE,        // particle, h, n, value: omega, bound: its pull's frequency, growth: factor per step - 1
     PFVI_FAULT_CALLBACK_CHANGED,// t: a callback replaced additional_forces, gravity_custom or extras
     PFVI_FAULT_PARTICLE_EDITED, // t, particle (SIZE_MAX: t itself), flag: which field (pfvi_written_fields)
+    PFVI_FAULT_UNRESOLVED_FIXED,// particle, h, t0, value: the error per orbit the stages imply, bound: |h| sigma (0: not measured)
+    PFVI_FAULT_VARIATIONAL,     // particle: the variational particle (index in particles_var), n: its real particle, flag: field (PFVI_WRITTEN_FIELDS), value, t0
 };
 struct pfvi_fault {
     enum pfvi_fault_kind kind;
@@ -675,6 +698,9 @@ struct pfvi_state {
     double density_dlog;
     struct pfvi_trial_record trial;
     struct pfvi_fault fault;
+    // A fixed step's stages implied an error above PFVI_FIXED_WARN and
+    // REBOUND was told (once per simulation; not saved).
+    int fixed_warned;
 
     // Scratch
     size_t N_allocated;
@@ -951,6 +977,9 @@ struct pfvi_scheme {
     // After a trial: the accelerations of particle i at the step's s nodes.
     void (*stage_accelerations)(const struct reb_simulation* r, const struct pfvi_state* st, size_t i,
             double (*a)[3]);
+    // ... and its positions there (at which those were evaluated).
+    void (*stage_positions)(const struct reb_simulation* r, const struct pfvi_state* st, size_t i,
+            double (*x)[3]);
     // After the fits: half the trace of the step's linear map of (d, w) for
     // particle i as fitted, moving in 1-D under the pull a = -W2 d towards
     // its centre. Above 1 (the determinant is 1) a deviation grows
@@ -963,9 +992,40 @@ PFVI_INTERNAL extern const struct pfvi_scheme pfvi_stages_scheme;     // pfvi_st
 // pfvi_step.c: one trial step of the scheme for the current stages, its commit.
 PFVI_INTERNAL enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h);
 PFVI_INTERNAL void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double h);
-// How well the trial just made resolves the forces: the largest
-// pfvi_stage_resolution over the particles.
-PFVI_INTERNAL double pfvi_trial_resolution(const struct reb_simulation* r, const struct pfvi_state* st, size_t N);
+// How well the trial of h just made resolves the forces: the largest
+// pfvi_stage_resolution over the particles, and which. A particle above
+// pull_above against its net acceleration is measured against the largest
+// pull on it at the step's start or end too (if field is not NULL); with
+// residual, a fitted particle's values are its stage accelerations less the
+// harmonic pull -omega^2 d its fitted path carries (the residual).
+struct pfvi_resolution {
+    double ratio;
+    size_t particle;    // SIZE_MAX: none
+};
+PFVI_INTERNAL struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, const struct pfvi_state* st,
+        size_t N, double h, const struct pfvi_field* field, double pull_above, int residual);
+// The error per orbit a step of resolution u implies at s stages (where a
+// Kepler orbit is resolved worst: PFVI_SYMMETRIC_CONSTANTS at u =
+// PFVI_RESOLUTION_CONSTANTS kappa), and its inverse.
+PFVI_INTERNAL double pfvi_resolution_error(int s, double u);
+PFVI_INTERNAL double pfvi_resolution_of_error(int s, double error);
+// The check of a fixed step (epsilon = 0) just tried: its resolution u, the
+// error per orbit that implies, and the particle where it is worst. 0 (rolled
+// back, fault recorded) if memory ran out.
+struct pfvi_fixed_check {
+    double u;
+    double error;
+    size_t particle;
+    double kappa;           // |h| sigma, 0 if not computed (PFVI_FIXED_GATE)
+    int refuse;
+};
+// 0 if the step is refused (rolled back, fault recorded: it is longer than
+// PFVI_FIXED_KAPPA_MAX/sigma) or memory ran out; fills out either way.
+// Whether every variational particle is finite at the step's start (x, v
+// and m); if not, a fault naming the first and its field (nothing changed).
+PFVI_INTERNAL int pfvi_var_start_finite(const struct reb_simulation* r, struct pfvi_state* st, double t0);
+PFVI_INTERNAL int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
+        struct pfvi_fixed_check* out);
 
 
 /* ---------------------------------------------------------- step control */

@@ -282,10 +282,15 @@ static double factorial(int n){
     return f;
 }
 
-// The resolution u of a trial step (pfvi.h, PFVI_RESOLUTION_CONSTANTS).
-static double symmetric_resolution(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
+// The resolution u of a trial step of h (pfvi.h, PFVI_RESOLUTION_CONSTANTS):
+// a particle whose u against its net acceleration is above u_low, the
+// lowest u a decision below looks at, is measured against the pulls on it
+// too (pfvi_trial_resolution: a cancelled acceleration is not an unresolved one).
+static double symmetric_resolution(const struct reb_simulation* r, const struct pfvi_state* st, size_t N, double h,
+        const struct pfvi_field* field, double u_low){
     const int s = st->options.stages;
-    return pow(factorial(s - 1)*pfvi_trial_resolution(r, st, N), 1./(s - 1.));
+    const double above = pow(u_low, s - 1.)/factorial(s - 1);
+    return pow(factorial(s - 1)*pfvi_trial_resolution(r, st, N, h, field, above, 0).ratio, 1./(s - 1.));
 }
 
 // Where a symmetric step starts on the track (struct pfvi_state): the
@@ -458,7 +463,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
                 return 0.;
             }
             pfvi_step_density(r->particles, NULL, N, &field, o->stages, st->partners, &sigma1, &g1);
-            u = symmetric_resolution(r, st, N);
+            u = symmetric_resolution(r, st, N, sign*h, &field, u_target/PFVI_RESOLUTION_SLACK);
             // (Both ends: a reversed step makes the same check.)
             const int jump = fmax(sigma0, sigma1)*lambda*h > PFVI_DENSITY_JUMP_MAX*kappa;
             // The error the stages imply, relative to the worst along

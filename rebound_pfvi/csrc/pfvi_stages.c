@@ -1009,6 +1009,16 @@ static void stages_stage_accelerations(const struct reb_simulation* r, const str
     }
 }
 
+static void stages_stage_positions(const struct reb_simulation* r, const struct pfvi_state* st, size_t i,
+        double (*x)[3]){
+    (void)r;
+    for (int k=0; k<st->rule.s; k++){
+        for (int c=0; c<3; c++){
+            x[k][c] = st->stage_x[i][k][c];
+        }
+    }
+}
+
 const struct pfvi_scheme pfvi_stages_scheme = {
     .prepare = stages_prepare,
     .fit = stages_fit,
@@ -1017,5 +1027,6 @@ const struct pfvi_scheme pfvi_stages_scheme = {
     .advance = stages_advance,
     .commit = stages_commit,
     .stage_accelerations = stages_stage_accelerations,
+    .stage_positions = stages_stage_positions,
     .half_trace = stages_half_trace,
 };

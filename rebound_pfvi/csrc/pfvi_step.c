@@ -121,18 +121,137 @@ void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* st, size_t N,
     stats->omega_max = st->trial.omega_max;
 }
 
-double pfvi_trial_resolution(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
+struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, const struct pfvi_state* st, size_t N,
+        double h, const struct pfvi_field* field, double pull_above, int residual){
     const struct pfvi_scheme* const scheme = pfvi_scheme_of(st);
     // The barycentric weights of the nodes: the rule's, or (0, 1)'s for s = 2.
     static const double two_point[2] = {-1., 1.};
+    static const double two_point_nodes[2] = {0., 1.};
     const int s = st->options.stages;
     const double* const weights = (s == 2) ? two_point : st->rule.lagrange;
-    double worst = 0.;
+    const double* const nodes = (s == 2) ? two_point_nodes : st->rule.c;
+    struct pfvi_resolution worst = {0., SIZE_MAX};
     for (size_t i=0; i<N; i++){
-        double a[PFVI_STAGES_MAX][3];
+        double a[PFVI_STAGES_MAX][3], f[PFVI_STAGES_MAX][3];
         scheme->stage_accelerations(r, st, i, a);
-        const double resolution = pfvi_stage_resolution((const double (*)[3])a, weights, s);
-        worst = (resolution > worst) ? resolution : worst;
+        const double omega = residual ? scheme->fitted_omega(st, i) : 0.;
+        if (omega != 0.){
+            // What the quadrature carries of a fitted step: the force less
+            // the harmonic pull -omega^2 d its path holds exactly, about
+            // the particle's centre c(t) (pfvi_centre.c).
+            double x[PFVI_STAGES_MAX][3];
+            scheme->stage_positions(r, st, i, x);
+            const struct pfvi_centre* const c = &st->centre[i];
+            const double w2 = omega*omega;
+            for (int k=0; k<s; k++){
+                for (int m=0; m<3; m++){
+                    const double d = (x[k][m] - c->x[m]) - pfvi_centre_shift(c, nodes[k]*h, m);
+                    f[k][m] = (a[k][m] - c->acc[m]) + w2*d;
+                }
+            }
+        }
+        const double (*const values)[3] = (omega != 0.) ? (const double (*)[3])f : (const double (*)[3])a;
+        double ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, 0.);
+        if (field && ratio > pull_above){
+            // Unresolved against its net acceleration: measured against the
+            // largest pull on it at either end (pfvi_timescales.c).
+            const double pull0 = pfvi_largest_pull2(st->start, N, field, i);
+            const double pull1 = pfvi_largest_pull2(r->particles, N, field, i);
+            ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, fmax(pull0, pull1));
+        }
+        if (ratio > worst.ratio || (ratio != ratio && worst.ratio == worst.ratio)){
+            worst = (struct pfvi_resolution){ratio, i};
+        }
     }
     return worst;
+}
+
+double pfvi_resolution_error(int s, double u){
+    static const double constant[PFVI_STAGES_MAX + 1] = PFVI_SYMMETRIC_CONSTANTS;
+    static const double resolution_constant[PFVI_STAGES_MAX + 1] = PFVI_RESOLUTION_CONSTANTS;
+    return constant[s]*pow(u/resolution_constant[s], 2.*s - 2.);
+}
+
+double pfvi_resolution_of_error(int s, double error){
+    static const double constant[PFVI_STAGES_MAX + 1] = PFVI_SYMMETRIC_CONSTANTS;
+    static const double resolution_constant[PFVI_STAGES_MAX + 1] = PFVI_RESOLUTION_CONSTANTS;
+    return resolution_constant[s]*pow(error/constant[s], 1./(2.*s - 2.));
+}
+
+// (s - 1)!
+static double factorial_of(int n){
+    double f = 1.;
+    for (int k=2; k<=n; k++){
+        f *= k;
+    }
+    return f;
+}
+
+int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
+        struct pfvi_fixed_check* out){
+    const int s = st->options.stages;
+    struct pfvi_field field;
+    if (!pfvi_field_of(r, st, &field)){
+        pfvi_roll_back(r, st, N, t0);
+        return 0;
+    }
+    // Particles whose stages imply the warning level against their net
+    // acceleration are measured against the pulls on them too.
+    const double u_warn = pfvi_resolution_of_error(s, PFVI_FIXED_WARN);
+    const double above = pow(u_warn, s - 1.)/factorial_of(s - 1);
+    const struct pfvi_resolution worst = pfvi_trial_resolution(r, st, N, h, &field, above, 1);
+    out->u = pow(factorial_of(s - 1)*worst.ratio, 1./(s - 1.));
+    out->error = pfvi_resolution_error(s, out->u);
+    out->particle = worst.particle;
+    out->kappa = 0.;
+    out->refuse = 0;
+    // The largest u any stage values give: |D| <= sum |w_k| A.
+    double weights_sum = 2.;
+    if (s > 2){
+        weights_sum = 0.;
+        for (int k=0; k<s; k++){
+            weights_sum += fabs(st->rule.lagrange[k]);
+        }
+    }
+    const double u_bound = pow(factorial_of(s - 1)*weights_sum, 1./(s - 1.));
+    if (!(out->u <= PFVI_FIXED_GATE*u_bound)){
+        // The stages' estimate is bounded (|D| <= sum |w_k| A): at s = 8 it
+        // stays below 0.01 however long the step, and a step over several
+        // orbits can converge to a root that is no motion at all. So a step
+        // they do not show well resolved is also measured on the density of
+        // the adaptive control at its two ends: a step longer than
+        // PFVI_FIXED_KAPPA_MAX/sigma covers more than an orbit of the
+        // fastest time scale, and is refused.
+        double sigma0, sigma1, g;
+        pfvi_step_density(st->start, st->end, N, &field, s, st->partners, &sigma0, &g);
+        pfvi_step_density(r->particles, NULL, N, &field, s, st->partners, &sigma1, &g);
+        const double sigma = fmax(sigma0, sigma1);
+        out->kappa = fabs(h)*sigma;
+        if (out->kappa > PFVI_FIXED_KAPPA_MAX){
+            out->refuse = 1;
+        }
+    }
+    st->statistics.error_estimate = out->error;
+    if (out->refuse){
+        pfvi_roll_back(r, st, N, t0);
+        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_UNRESOLVED_FIXED, .particle = out->particle, .h = h,
+            .t0 = t0, .value = out->error, .bound = out->kappa};
+    }
+    return !out->refuse;
+}
+
+int pfvi_var_start_finite(const struct reb_simulation* r, struct pfvi_state* st, double t0){
+    const struct reb_particle* const pv = r->particles_var;
+    const size_t v = pfvi_first_not_finite(pv, st->var_N);
+    if (v == SIZE_MAX){
+        return 1;
+    }
+    const double values[7] = {pv[v].x, pv[v].y, pv[v].z, pv[v].vx, pv[v].vy, pv[v].vz, pv[v].m};
+    int field = 0;
+    while (field < 6 && isfinite(values[field])){
+        field++;
+    }
+    st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_VARIATIONAL, .particle = v, .n = st->var_real[v],
+        .flag = field, .value = values[field], .t0 = t0};
+    return 0;
 }

@@ -31,6 +31,16 @@
  * every image of a pair is a pair (a partner may be an image). The logarithmic rate d log(sigma)/dt is
  * exact along the motion: each term's from r, v and the relative
  * acceleration.
+ *
+ * The resolution check measures a body's stage accelerations against the
+ * forces acting on it, not only against its net acceleration: where pulls
+ * cancel (the centre of a symmetric ring, a body between two equal masses)
+ * the net acceleration is round-off of the pulls, and its variation over
+ * the stages is round-off too, which against the net acceleration alone
+ * read as an unresolved force (issue 36: the six-body ring was retaken
+ * without end). So a body whose stages look unresolved is measured again
+ * against the largest single pull on it at either end of the step
+ * (pfvi_largest_pull2).
  */
 #include <math.h>
 #include "pfvi.h"
@@ -370,17 +380,43 @@ int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state*
     return isfinite(*sigma) && isfinite(*dlog_sigma);
 }
 
-double pfvi_stage_resolution(const double (*a)[3], const double* weights, int s){
+double pfvi_stage_resolution(const double (*f)[3], const double (*a)[3], const double* weights, int s, double scale2){
     double D[3] = {0., 0., 0.}, A2 = 0.;
     for (int k=0; k<s; k++){
         for (int c=0; c<3; c++){
-            D[c] += weights[k]*a[k][c];
+            D[c] += weights[k]*f[k][c];
         }
         const double a2 = a[k][0]*a[k][0] + a[k][1]*a[k][1] + a[k][2]*a[k][2];
         A2 = (a2 > A2) ? a2 : A2;
     }
+    A2 = (scale2 > A2) ? scale2 : A2;
     if (!(A2 > 0.)){
         return 0.;
     }
     return sqrt((D[0]*D[0] + D[1]*D[1] + D[2]*D[2])/A2);
+}
+
+double pfvi_largest_pull2(const struct reb_particle* p, size_t N, const struct pfvi_field* f, size_t i){
+    if (!(f->G > 0.)){
+        return 0.;
+    }
+    const size_t n_attracting = (f->N_active < N) ? f->N_active : N;
+    double largest = 0.;
+    for (size_t j=0; j<n_attracting; j++){
+        if (j == i || !(p[j].m > 0.)){
+            continue;
+        }
+        for (size_t g=0; g<f->n_images; g++){
+            const struct reb_vec6d* const sh = &f->images[g];
+            const double dx = (p[j].x + sh->x) - p[i].x, dy = (p[j].y + sh->y) - p[i].y,
+                dz = (p[j].z + sh->z) - p[i].z;
+            const double r2 = (dx*dx + dy*dy + dz*dz) + f->softening2;
+            // (G m_j/r^2)^2, with G m_j/r^2 formed first (its square
+            // overflows later than m_j^2 or r^4 would).
+            const double pull = f->G*p[j].m/r2;
+            const double pull2 = pull*pull;
+            largest = (pull2 > largest) ? pull2 : largest;
+        }
+    }
+    return isfinite(largest) ? largest : 0.;
 }

@@ -292,6 +292,14 @@ static void two_point_stage_accelerations(const struct reb_simulation* r, const 
     a[1][0] = p->ax; a[1][1] = p->ay; a[1][2] = p->az;
 }
 
+static void two_point_stage_positions(const struct reb_simulation* r, const struct pfvi_state* st, size_t i,
+        double (*x)[3]){
+    const struct reb_particle* const p0 = &st->start[i];
+    const struct reb_particle* const p = &r->particles[i];
+    x[0][0] = p0->x; x[0][1] = p0->y; x[0][2] = p0->z;
+    x[1][0] = p->x; x[1][1] = p->y; x[1][2] = p->z;
+}
+
 const struct pfvi_scheme pfvi_two_point_scheme = {
     .prepare = two_point_prepare,
     .fit = two_point_fit,
@@ -300,5 +308,6 @@ const struct pfvi_scheme pfvi_two_point_scheme = {
     .advance = two_point_advance,
     .commit = two_point_commit,
     .stage_accelerations = two_point_stage_accelerations,
+    .stage_positions = two_point_stage_positions,
     .half_trace = two_point_half_trace,
 };
