@@ -132,7 +132,11 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // step density sigma = (sum_i omega_i^K)^(1/K) of the pairs' frequencies
 // omega_i^2 = G (m_i + m_partner)/r^3, and kappa = (epsilon/C_s)^(1/(2s - 2))
 // (C_s: PFVI_SYMMETRIC_CONSTANTS, measured so that epsilon is about the
-// relative position error per orbit at e = 0.5), at most KAPPA_MAX.
+// relative position error per orbit at e = 0.5), at most KAPPA_MAX: where the
+// Newton stage solve keeps a margin of 2 (with fixed steps at s = 8 it
+// converges in 3 to 5 rounds up to kappa 4 to 5, docs/solve.md) and the
+// error model still holds (Kepler e = 0 ... 0.99 at s = 8 and epsilon up to
+// 1e-3, kappa 1.9: at most 0.6 epsilon a n). The fixed-point solve held it at 1.
 #define PFVI_DENSITY_NORM 8
 // e^2 beyond which the eccentricity factor (1 - e^2)^(-gamma) is held
 // (e = 0.999; unbound and radial pairs get it too): beyond it epsilon's
@@ -143,7 +147,7 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 #define PFVI_DENSITY_NEGLIGIBLE 0.3
 #define PFVI_SYMMETRIC_CONSTANTS {0., 0., 14., 0.32, 0.019, 8.3e-4, 4.4e-5, 2.3e-6, 1.2e-7}
 #define PFVI_SYMMETRIC_BETA {0., 0., 1.5, 2.2, 2.5, 3.0, 3.4, 3.8, 4.2}
-#define PFVI_KAPPA_MAX 1.0
+#define PFVI_KAPPA_MAX 2.0
 // Epsilon below which the symmetric control's error per orbit stops
 // falling (round-off; measured, Kepler e = 0.5, 10 orbits): a smaller
 // request is taken as this, per s. (Above C_s KAPPA_MAX^(2s - 2) kappa is
@@ -227,6 +231,9 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // Newton iterations on Kepler's equation per stage point of the two-body
 // predictor, at most (the Taylor path if it does not converge).
 #define PFVI_PREDICTOR_KEPLER_ITERATIONS 30
+// ... stopped when its correction of the universal anomaly is below this
+// (relative): the Newton rounds take the predictor's error quadratically.
+#define PFVI_PREDICTOR_KEPLER_TOLERANCE 1e-12
 
 
 /* ---------------------------------------------------- quadrature (lobatto) */
@@ -394,6 +401,7 @@ PFVI_INTERNAL double pfvi_osculating_error(const double x0[3], const struct pfvi
 // 1 .. k_last carry forces that act within the step; y[increment] is the
 // step's position increment (the change is measured relative to it).
 struct pfvi_solve_form {
+    int classical;      // the classical form: X the shift x_k = q_k + y[k-1], k_last = s - 2
     int m;
     int k_last;
     int increment;
@@ -411,11 +419,14 @@ struct pfvi_newton {
     int kind;
     size_t partner;
     size_t companion;   // SINGLE about a pair's barycentre: the partner's partner (else SIZE_MAX)
-    double P[PFVI_STAGES_MAX][PFVI_STAGES_MAX];   // LU of I + S diag(g) X
+    int mc;                        // the unknowns the step's forces depend on (the leading ones)
+    double P[PFVI_STAGES_MAX][PFVI_STAGES_MAX];   // LU of I + S diag(g) X over them
     int Ppiv[PFVI_STAGES_MAX];
+    double Pinv[PFVI_STAGES_MAX];                 // its pivots' reciprocals
     double Q[PFVI_STAGES_MAX-1][PFVI_STAGES_MAX]; // P^-1 S
     double C[PFVI_STAGES_MAX][PFVI_STAGES_MAX];   // LU of Woodbury's capacitance matrix
     int Cpiv[PFVI_STAGES_MAX];
+    double Cinv[PFVI_STAGES_MAX];
     double n[PFVI_STAGES_MAX][3];  // direction from the partner at each stage (softened length)
     double d[PFVI_STAGES_MAX];     // the rank-one weight 3 fscale alpha_k
     double gc[PFVI_STAGES_MAX];    // the isotropic part -fscale alpha_k

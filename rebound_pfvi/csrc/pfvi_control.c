@@ -491,7 +491,17 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
             }
         }
         st->statistics.n_rejected++;
-        st->statistics.n_solve_halved += (trial == PFVI_TRIAL_NOT_CONVERGED);
+        if (trial == PFVI_TRIAL_NOT_CONVERGED){
+            // The solve's own failure, unless its last stages show forces the
+            // step does not resolve (a time scale the density missed: the
+            // resolution check would retake it had the solve converged).
+            int resolved = 1;
+            if (pfvi_field_of(r, st, &field)){
+                const double u_last = symmetric_resolution(r, st, N, sign*h, &field, u_target/PFVI_RESOLUTION_SLACK);
+                resolved = !(pow(u_last/u_target, 2.*o->stages - 2.) > PFVI_RESOLUTION_MAX);
+            }
+            st->statistics.n_solve_halved += (uint64_t)resolved;
+        }
         shortened = 1;
         h = h_next;
         if (t0 + sign*h == t0){

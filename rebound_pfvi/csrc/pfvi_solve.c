@@ -15,13 +15,20 @@
  * every stage of the first iterate (one factorisation per step). Mutual
  * partners (a binary, a star and its closest planet) are corrected in their
  * relative coordinate with mu = G (m_i + m_j), their barycentre by the plain
- * round; every other body after its partner, with the partner's correction
- * on its right-hand side. The per-body matrix
+ * round; every other body after its centre (its partner, or the barycentre
+ * of a pair bound more tightly than it is to that partner), with the
+ * centre's correction on its right-hand side. The per-body matrix
  *     M = I + S diag(g) X (x) I_3 + sum_k d_k (S e_k (x) n_k)(X^T e_k (x) n_k)^T
  * (g_k = u2 - fscale alpha_k, d_k = 3 fscale alpha_k) is an isotropic part
  * Kronecker with I_3 plus one rank-one term per stage, solved by Woodbury's
- * identity: an m x m and a K x K factorisation per step (K the stages whose
- * force enters), about 700 flops per round and body at s = 8.
+ * identity: two factorisations of at most 7 x 7 per step and body (the
+ * unknowns the forces depend on; K the stages whose force acts within the
+ * step), a few hundred flops per round.
+ *
+ * The first iterate (pfvi_solve_predict) draws each body along its two-body
+ * orbit about that centre (universal variables), the rest of its
+ * acceleration extrapolated from the last step's stages and integrated by
+ * the classical form's own stage formula.
  *
  * The residual G(y) - y of each round is the exact one: the partner model
  * changes only how fast the iterates converge, never what they converge to.
@@ -30,8 +37,10 @@
  * ratio of the last two corrections, once theta/(1 - theta) times the last
  * correction is below the doubles' resolution, the corrected iterate is
  * taken through one final round, which must confirm it; a change that grows
- * refreshes the Jacobians at the current iterate, and grows again, drops
- * them for the plain round (counted in n_solve_recovered). docs/solve.md.
+ * refreshes the Jacobians at the current iterate, and growing again, drops
+ * them for the plain round (counted in n_solve_recovered); a third time the
+ * solve has failed (the control halves the step: n_solve_halved).
+ * docs/solve.md.
  */
 #include <float.h>
 #include <math.h>
@@ -40,9 +49,11 @@
 
 /* ---------------------------------------------------------- small LU */
 
-// LU factorisation with partial pivoting of the n x n matrix A (row
-// stride PFVI_STAGES_MAX) in place; 0 if a pivot is zero or not finite.
-static int lu_factor(int n, double A[][PFVI_STAGES_MAX], int* piv){
+#define LU_MAX PFVI_STAGES_MAX
+
+// LU factorisation with partial pivoting of the n x n matrix A (n <= 8) in
+// place, and the pivots' reciprocals; 0 if a pivot is zero or not finite.
+static int lu_factor(int n, double (*A)[LU_MAX], int* piv, double* inverse){
     for (int k=0; k<n; k++){
         int p = k;
         for (int i=k+1; i<n; i++){
@@ -57,9 +68,9 @@ static int lu_factor(int n, double A[][PFVI_STAGES_MAX], int* piv){
         if (!(A[k][k] != 0.) || !isfinite(A[k][k])){
             return 0;
         }
-        const double inv = 1./A[k][k];
+        inverse[k] = 1./A[k][k];
         for (int i=k+1; i<n; i++){
-            const double g = A[i][k]*inv;
+            const double g = A[i][k]*inverse[k];
             A[i][k] = g;
             for (int j=k+1; j<n; j++){
                 A[i][j] -= g*A[k][j];
@@ -69,67 +80,70 @@ static int lu_factor(int n, double A[][PFVI_STAGES_MAX], int* piv){
     return 1;
 }
 
-// Solves with lu_factor's factors, 3 right-hand sides b[0..n-1][c] in place.
-static void lu_solve3(int n, const double A[][PFVI_STAGES_MAX], const int* piv, double (*b)[3]){
+// Solves with lu_factor's factors for `width` right-hand sides b[row][0 ..
+// width-1] in place. (The factors are of the rows as finally permuted:
+// every swap first, then L, then U.)
+static void lu_solve(int n, const double (*A)[LU_MAX], const int* piv, const double* inverse,
+        double (*b)[3], int width){
     for (int k=0; k<n; k++){
-        if (piv[k] != k){
-            for (int c=0; c<3; c++){
-                const double t = b[k][c]; b[k][c] = b[piv[k]][c]; b[piv[k]][c] = t;
-            }
+        for (int c=0; c<width; c++){
+            const double t = b[piv[k]][c]; b[piv[k]][c] = b[k][c]; b[k][c] = t;
         }
+    }
+    for (int k=0; k<n; k++){
         for (int i=k+1; i<n; i++){
-            for (int c=0; c<3; c++){
-                b[i][c] -= A[i][k]*b[k][c];
+            const double g = A[i][k];
+            for (int c=0; c<width; c++){
+                b[i][c] -= g*b[k][c];
             }
         }
     }
     for (int k=n-1; k>=0; k--){
-        for (int c=0; c<3; c++){
+        for (int c=0; c<width; c++){
             double sum = b[k][c];
             for (int j=k+1; j<n; j++){
                 sum -= A[k][j]*b[j][c];
             }
-            b[k][c] = sum/A[k][k];
+            b[k][c] = sum*inverse[k];
         }
-    }
-}
-
-// The same for one right-hand side.
-static void lu_solve1(int n, const double A[][PFVI_STAGES_MAX], const int* piv, double* b){
-    for (int k=0; k<n; k++){
-        if (piv[k] != k){
-            const double t = b[k]; b[k] = b[piv[k]]; b[piv[k]] = t;
-        }
-        for (int i=k+1; i<n; i++){
-            b[i] -= A[i][k]*b[k];
-        }
-    }
-    for (int k=n-1; k>=0; k--){
-        double sum = b[k];
-        for (int j=k+1; j<n; j++){
-            sum -= A[k][j]*b[j];
-        }
-        b[k] = sum/A[k][k];
     }
 }
 
 /* ------------------------------------------- Newton with the partner's pull */
 
+// The unknowns the forces within the step depend on (the leading ones: the
+// classical form's end position is not among them).
+static int coupled_unknowns(const struct pfvi_solve_form* f){
+    int mc = 0;
+    for (int j=0; j<f->m; j++){
+        for (int k=1; k<=f->k_last; k++){
+            mc = (f->X[k][j] != 0.) ? j + 1 : mc;
+        }
+    }
+    return mc;
+}
+
 // One body's (or one mutual pair's relative) Newton matrix at the stages of
-// the first iterate, factorised for Woodbury's identity.
+// the first iterate over the coupled unknowns' components,
+//     M = P (x) I_3 + sum_k d_k (S e_k (x) n_k)(X^T e_k (x) n_k)^T,
+// P = I + S diag(g) X: an isotropic part, Kronecker with I_3, and one
+// rank-one term per stage, factorised for Woodbury's identity: P (mc x mc)
+// and the capacitance C = I + [d_k' (X P^-1 S)[k][k'] (n_k . n_k')] (K x K).
+// (P alone is the stage matrix of an oscillator of frequency alpha^1/2, with
+// Lobatto IIIA-IIIB's eigenvalues it is regular for every real step.)
 static int newton_factor(const struct pfvi_solve_form* f, const double (*n)[3], const double* alpha,
         struct pfvi_newton* u){
-    const int m = f->m, K = f->k_last;
+    const int K = f->k_last, mc = coupled_unknowns(f);
+    u->mc = mc;
     double g[PFVI_STAGES_MAX];
     for (int k=1; k<=K; k++){
-        g[k] = f->u2 - f->fscale*alpha[k];
         u->d[k] = 3.*f->fscale*alpha[k];
         u->gc[k] = -f->fscale*alpha[k];
+        g[k] = f->u2 + u->gc[k];
         u->n[k][0] = n[k][0]; u->n[k][1] = n[k][1]; u->n[k][2] = n[k][2];
     }
-    // P = I + S diag(g) X; Q = P^-1 S (columns 1 .. K).
-    for (int l=0; l<m; l++){
-        for (int j=0; j<m; j++){
+    for (int l=0; l<mc; l++){
+        for (int j=0; j<mc; j++){
             double sum = (l == j) ? 1. : 0.;
             for (int k=1; k<=K; k++){
                 sum += f->S[l][k]*g[k]*f->X[k][j];
@@ -137,52 +151,153 @@ static int newton_factor(const struct pfvi_solve_form* f, const double (*n)[3], 
             u->P[l][j] = sum;
         }
     }
-    if (!lu_factor(m, u->P, u->Ppiv)){
+    if (!lu_factor(mc, u->P, u->Ppiv, u->Pinv)){
         return 0;
     }
-    for (int k=1; k<=K; k++){
-        double col[PFVI_STAGES_MAX];
-        for (int l=0; l<m; l++){
-            col[l] = f->S[l][k];
+    // Q = P^-1 S, its columns 1 .. K (in rows of up to 3: the solve's width).
+    for (int k0=1; k0<=K; k0+=3){
+        double cols[PFVI_STAGES_MAX][3];
+        const int width = (K - k0 + 1 < 3) ? K - k0 + 1 : 3;
+        for (int l=0; l<mc; l++){
+            for (int c=0; c<width; c++){
+                cols[l][c] = f->S[l][k0 + c];
+            }
         }
-        lu_solve1(m, (const double (*)[PFVI_STAGES_MAX])u->P, u->Ppiv, col);
-        for (int l=0; l<m; l++){
-            u->Q[l][k] = col[l];
+        lu_solve(mc, (const double (*)[LU_MAX])u->P, u->Ppiv, u->Pinv, cols, width);
+        for (int l=0; l<mc; l++){
+            for (int c=0; c<width; c++){
+                u->Q[l][k0 + c] = cols[l][c];
+            }
         }
     }
-    // C = I + [d_k' (X Q)[k][k'] (n_k . n_k')], stages 1 .. K as rows 0 .. K-1.
     for (int k=1; k<=K; k++){
         for (int kk=1; kk<=K; kk++){
             double H = 0.;
-            for (int l=0; l<m; l++){
+            for (int l=0; l<mc; l++){
                 H += f->X[k][l]*u->Q[l][kk];
             }
             const double nn = n[k][0]*n[kk][0] + n[k][1]*n[kk][1] + n[k][2]*n[kk][2];
             u->C[k-1][kk-1] = ((k == kk) ? 1. : 0.) + u->d[kk]*H*nn;
         }
     }
-    return lu_factor(K, u->C, u->Cpiv);
+    return lu_factor(K, u->C, u->Cpiv, u->Cinv);
 }
 
-// b <- M^-1 b for a factorised unit (b: m rows of 3).
-static void newton_apply(const struct pfvi_solve_form* f, const struct pfvi_newton* u, double (*b)[3]){
-    const int m = f->m, K = f->k_last;
-    lu_solve3(m, (const double (*)[PFVI_STAGES_MAX])u->P, u->Ppiv, b);
+// The partner's tidal tensor at stage k applied to dx: J dx = g dx + d n (n . dx).
+static void tidal_apply(const struct pfvi_newton* u, int k, double g, const double dx[3], double out[3]){
+    const double nd = u->d[k]*(u->n[k][0]*dx[0] + u->n[k][1]*dx[1] + u->n[k][2]*dx[2]);
+    for (int c=0; c<3; c++){
+        out[c] = g*dx[c] + nd*u->n[k][c];
+    }
+}
+
+// newton_apply for the classical form of s stages, written for a constant s
+// (each s its own unrolled loops): X is the shift Q^k = q_k + y[k-1], the
+// coupled unknowns are the s - 2 interior stages, and the end y[s-2]
+// follows from them.
+static inline __attribute__((always_inline)) void newton_apply_classical_n(const struct pfvi_solve_form* f,
+        const struct pfvi_newton* u, double (*b)[3], const int s){
+    const int mc = s - 2;
+    for (int k=0; k<mc; k++){
+        const int p = u->Ppiv[k];
+        for (int c=0; c<3; c++){
+            const double t = b[p][c]; b[p][c] = b[k][c]; b[k][c] = t;
+        }
+    }
+    for (int k=0; k<mc; k++){
+        for (int i=k+1; i<mc; i++){
+            const double g = u->P[i][k];
+            for (int c=0; c<3; c++){
+                b[i][c] -= g*b[k][c];
+            }
+        }
+    }
+    for (int k=mc-1; k>=0; k--){
+        for (int c=0; c<3; c++){
+            double sum = b[k][c];
+            for (int j=k+1; j<mc; j++){
+                sum -= u->P[k][j]*b[j][c];
+            }
+            b[k][c] = sum*u->Pinv[k];
+        }
+    }
     double t[PFVI_STAGES_MAX];
+    for (int k=1; k<=mc; k++){
+        t[k-1] = u->n[k][0]*b[k-1][0] + u->n[k][1]*b[k-1][1] + u->n[k][2]*b[k-1][2];
+    }
+    for (int k=0; k<mc; k++){
+        const int p = u->Cpiv[k];
+        const double x = t[p]; t[p] = t[k]; t[k] = x;
+    }
+    for (int k=0; k<mc; k++){
+        for (int i=k+1; i<mc; i++){
+            t[i] -= u->C[i][k]*t[k];
+        }
+    }
+    for (int k=mc-1; k>=0; k--){
+        double sum = t[k];
+        for (int j=k+1; j<mc; j++){
+            sum -= u->C[k][j]*t[j];
+        }
+        t[k] = sum*u->Cinv[k];
+    }
+    for (int k=1; k<=mc; k++){
+        const double tau = t[k-1]*u->d[k];
+        for (int l=0; l<mc; l++){
+            const double q = tau*u->Q[l][k];
+            b[l][0] -= q*u->n[k][0]; b[l][1] -= q*u->n[k][1]; b[l][2] -= q*u->n[k][2];
+        }
+    }
+    for (int k=1; k<=mc; k++){
+        double Jdx[3];
+        tidal_apply(u, k, u->gc[k], b[k-1], Jdx);
+        const double S = f->S[s-2][k];
+        b[s-2][0] -= S*Jdx[0]; b[s-2][1] -= S*Jdx[1]; b[s-2][2] -= S*Jdx[2];
+    }
+}
+
+// b <- M^-1 b for a factorised unit (b: m rows of 3): the coupled unknowns
+// by Woodbury's identity, the others (the classical end) from them.
+static void newton_apply(const struct pfvi_solve_form* f, const struct pfvi_newton* u, double (*b)[3]){
+    if (f->classical){
+        switch (f->m + 1){
+            case 3: newton_apply_classical_n(f, u, b, 3); return;
+            case 4: newton_apply_classical_n(f, u, b, 4); return;
+            case 5: newton_apply_classical_n(f, u, b, 5); return;
+            case 6: newton_apply_classical_n(f, u, b, 6); return;
+            case 7: newton_apply_classical_n(f, u, b, 7); return;
+            default: newton_apply_classical_n(f, u, b, PFVI_STAGES_MAX); return;
+        }
+    }
+    const int mc = u->mc, K = f->k_last;
+    lu_solve(mc, (const double (*)[LU_MAX])u->P, u->Ppiv, u->Pinv, b, 3);
+    double t[PFVI_STAGES_MAX][3];
     for (int k=1; k<=K; k++){
         double xi[3] = {0., 0., 0.};
-        for (int l=0; l<m; l++){
+        for (int l=0; l<mc; l++){
             const double X = f->X[k][l];
             xi[0] += X*b[l][0]; xi[1] += X*b[l][1]; xi[2] += X*b[l][2];
         }
-        t[k-1] = u->n[k][0]*xi[0] + u->n[k][1]*xi[1] + u->n[k][2]*xi[2];
+        t[k-1][0] = u->n[k][0]*xi[0] + u->n[k][1]*xi[1] + u->n[k][2]*xi[2];
     }
-    lu_solve1(K, (const double (*)[PFVI_STAGES_MAX])u->C, u->Cpiv, t);
+    lu_solve(K, (const double (*)[LU_MAX])u->C, u->Cpiv, u->Cinv, t, 1);
     for (int k=1; k<=K; k++){
-        const double tau = t[k-1]*u->d[k];
-        for (int l=0; l<m; l++){
+        const double tau = t[k-1][0]*u->d[k];
+        for (int l=0; l<mc; l++){
             const double q = tau*u->Q[l][k];
             b[l][0] -= q*u->n[k][0]; b[l][1] -= q*u->n[k][1]; b[l][2] -= q*u->n[k][2];
+        }
+    }
+    for (int k=1; mc < f->m && k<=K; k++){
+        double dx[3] = {0., 0., 0.}, Jdx[3];
+        for (int j=0; j<mc; j++){
+            const double X = f->X[k][j];
+            dx[0] += X*b[j][0]; dx[1] += X*b[j][1]; dx[2] += X*b[j][2];
+        }
+        tidal_apply(u, k, f->u2 + u->gc[k], dx, Jdx);
+        for (int l=mc; l<f->m; l++){
+            const double S = f->S[l][k];
+            b[l][0] -= S*Jdx[0]; b[l][1] -= S*Jdx[1]; b[l][2] -= S*Jdx[2];
         }
     }
 }
@@ -191,19 +306,14 @@ static void newton_apply(const struct pfvi_solve_form* f, const struct pfvi_newt
 // S [fscale J_k dx_p,k]_k, dx_p the partner's stage displacements.
 static void newton_cross(const struct pfvi_solve_form* f, const struct pfvi_newton* u,
         const struct pfvi_solve_form* fp, const double (*Dp)[3], double (*b)[3]){
-    const int m = f->m, K = f->k_last;
-    for (int k=1; k<=K; k++){
-        double dx[3] = {0., 0., 0.};
+    for (int k=1; k<=f->k_last; k++){
+        double dx[3] = {0., 0., 0.}, J[3];
         for (int l=0; l<fp->m; l++){
             const double X = fp->X[k][l];
             dx[0] += X*Dp[l][0]; dx[1] += X*Dp[l][1]; dx[2] += X*Dp[l][2];
         }
-        const double nd = u->d[k]*(u->n[k][0]*dx[0] + u->n[k][1]*dx[1] + u->n[k][2]*dx[2]);
-        double J[3];
-        for (int c=0; c<3; c++){
-            J[c] = u->gc[k]*dx[c] + nd*u->n[k][c];
-        }
-        for (int l=0; l<m; l++){
+        tidal_apply(u, k, u->gc[k], dx, J);
+        for (int l=0; l<f->m; l++){
             const double S = f->S[l][k];
             b[l][0] += S*J[0]; b[l][1] += S*J[1]; b[l][2] += S*J[2];
         }
@@ -534,12 +644,15 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
         rounds++;
         end_evaluated = (k_last == s - 1);
         ops->round(st, N, h);
-        residual = change_of(st, N);
+        // The round's own change (the residual) is needed to confirm a final
+        // iterate, at the round-off floor and without Newton; otherwise the
+        // correction's change says everything (a NaN passes through it).
+        residual = (final || !newton) ? change_of(st, N) : NAN;
         if (residual == 0. || (final && residual <= PFVI_SOLVE_CONFIRM)){
             converged = 1;
             break;
         }
-        if (!isfinite(residual)){
+        if (!newton && !isfinite(residual)){
             break;
         }
         final = 0;
@@ -552,6 +665,10 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
         const enum pfvi_solve_next next = pfvi_solve_verdict(change, previous, rounds >= PFVI_ITERATION_MAX);
         if (next == PFVI_SOLVE_FAILED){
             break;
+        }
+        if (next == PFVI_SOLVE_CONVERGED && newton){
+            // (at the round-off floor the correction is the residual's size)
+            residual = change;
         }
         if (next == PFVI_SOLVE_CONVERGED && residual <= PFVI_ITERATION_TOLERANCE){
             // At the round-off floor: the iterate the forces were evaluated at.
@@ -578,7 +695,7 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
         }
     }
     st->trial.rounds = (uint64_t)rounds;
-    st->trial.change = residual;
+    st->trial.change = isnan(residual) ? change : residual;  // (what the last round measured)
     if (converged && !end_evaluated && !ops->forces(r, st, N, t0, h, s - 1, s - 1)){
         return PFVI_TRIAL_ERROR;
     }
@@ -610,45 +727,60 @@ static void stumpff(double x, double c[4]){
     c[3] = (1. - c[1])/x;
 }
 
-// The two-body drift of (r0, v0) about mu by dt in universal variables,
-// from the guess *s of the universal anomaly (0: none); 0 if Newton's method
-// on Kepler's equation did not converge (the caller then takes the Taylor path).
-static int kepler_drift(const double r0[3], const double v0[3], double mu, double dt, double* s_guess, double r[3]){
-    const double r0n = sqrt(r0[0]*r0[0] + r0[1]*r0[1] + r0[2]*r0[2]);
-    const double eta = r0[0]*v0[0] + r0[1]*v0[1] + r0[2]*v0[2];
-    const double beta = 2.*mu/r0n - (v0[0]*v0[0] + v0[1]*v0[1] + v0[2]*v0[2]);
-    if (!(r0n > 0.) || !(mu > 0.) || !isfinite(beta)){
-        return 0;
-    }
-    double s = (*s_guess != 0.) ? *s_guess : dt/r0n;
+// The two-body orbit of (r0, v0) about mu in universal variables, kept
+// between the stages of one step (each starts from the last's anomaly).
+struct kepler_orbit_uv {
+    double r0n, eta, beta, mu;
+    double s, t;        // the universal anomaly of the last point drawn, and its time
+    double r, dr;       // the radius there and its rate d r/dt
+};
+
+static int kepler_start(const double r0[3], const double v0[3], double mu, struct kepler_orbit_uv* o){
+    o->r0n = sqrt(r0[0]*r0[0] + r0[1]*r0[1] + r0[2]*r0[2]);
+    o->eta = r0[0]*v0[0] + r0[1]*v0[1] + r0[2]*v0[2];
+    o->beta = 2.*mu/o->r0n - (v0[0]*v0[0] + v0[1]*v0[1] + v0[2]*v0[2]);
+    o->mu = mu;
+    o->s = 0.;
+    o->t = 0.;
+    o->r = o->r0n;
+    o->dr = o->eta/o->r0n;
+    return o->r0n > 0. && mu > 0. && isfinite(o->beta) && isfinite(o->eta);
+}
+
+// The point t after the start: Kepler's equation r0 G1 + eta G2 + mu G3 = t
+// solved by Halley's method from the Taylor guess s + dt/r - dr dt^2/(2 r^2)
+// about the last point drawn (ds/dt = 1/r); 0 if it did not converge.
+static int kepler_drift(const double r0[3], const double v0[3], struct kepler_orbit_uv* o, double t, double r[3]){
+    const double dt = t - o->t;
+    double s = o->s + dt/o->r - 0.5*o->dr*dt*dt/(o->r*o->r);
     double c[4];
     int converged = 0;
     for (int it=0; it<PFVI_PREDICTOR_KEPLER_ITERATIONS; it++){
-        stumpff(beta*s*s, c);
+        stumpff(o->beta*s*s, c);
         const double G1 = s*c[1], G2 = s*s*c[2], G3 = s*s*s*c[3];
-        const double F = r0n*G1 + eta*G2 + mu*G3 - dt;
-        const double dF = r0n*c[0] + eta*G1 + mu*G2;   // the radius at s
-        const double ds = F/dF;
-        s -= ds;
-        if (!isfinite(s)){
+        const double F = o->r0n*G1 + o->eta*G2 + o->mu*G3 - t;
+        const double dF = o->r0n*c[0] + o->eta*G1 + o->mu*G2;   // the radius at s
+        const double ddF = o->eta*c[0] + (o->mu - o->beta*o->r0n)*G1;
+        const double ds = F/(dF - 0.5*F*ddF/dF);
+        if (!isfinite(ds)){
             return 0;
         }
-        if (fabs(ds) <= 1e-14*fabs(s)){
+        if (fabs(ds) <= PFVI_PREDICTOR_KEPLER_TOLERANCE*fabs(s)){
+            // (f and g from the functions at s: ds changes them by less than the tolerance)
+            const double f = 1. - o->mu*G2/o->r0n, g = t - o->mu*G3;
+            for (int k=0; k<3; k++){
+                r[k] = f*r0[k] + g*v0[k];
+            }
+            o->s = s - ds;
+            o->t = t;
+            o->r = dF;
+            o->dr = ddF/dF;
             converged = 1;
             break;
         }
+        s -= ds;
     }
-    if (!converged){
-        return 0;
-    }
-    stumpff(beta*s*s, c);
-    const double G2 = s*s*c[2], G3 = s*s*s*c[3];
-    const double f = 1. - mu*G2/r0n, g = dt - mu*G3;
-    for (int k=0; k<3; k++){
-        r[k] = f*r0[k] + g*v0[k];
-    }
-    *s_guess = s;
-    return 1;
+    return converged;
 }
 
 // The two-body pull of the relative position r about mu (softened).
@@ -774,15 +906,16 @@ static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, 
         rest_integral(st, basis, h, cma0, (const double (*)[3])cma_old, cm_drift);
     }
     const int drawn = centre_first(st, &cr, i);
-    double sk = 0.;
+    struct kepler_orbit_uv orbit;
+    int kepler = kepler_start(r0, w0, mu, &orbit);
     for (int k=1; k<s; k++){
         const double t = st->rule.c[k]*h;
         double r[3];
-        if (!kepler_drift(r0, w0, mu, t, &sk, r)){
+        kepler = kepler && kepler_drift(r0, w0, &orbit, t, r);
+        if (!kepler){
             for (int c=0; c<3; c++){
                 r[c] = r0[c] + t*(w0[c] + 0.5*t*pull[c]);
             }
-            sk = 0.;
         }
         for (int c=0; c<3; c++){
             r[c] += drift[k][c];

@@ -395,6 +395,7 @@ static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
 static void classical_form(const struct pfvi_lobatto* rule, double h, struct pfvi_solve_form* f){
     const int s = rule->s, m = s - 1;
     memset(f, 0, sizeof(*f));
+    f->classical = 1;
     f->m = m;
     f->k_last = s - 2;
     f->increment = s - 2;
