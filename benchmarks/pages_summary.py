@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Dict, List
+from typing import Dict, List, Tuple
 
 from rebound_pfvi import report
 from rebound_pfvi.runs import Run
@@ -26,6 +26,31 @@ PAGES = {"kepler-e0.5": "Kepler e = 0.5", "kepler-e0.9": "Kepler e = 0.9", "kepl
          "sungrazer-e0.999": "sungrazer", "circumbinary": "circumbinary planet",
          "outer-solar-system": "outer solar system", "periodic-box": "periodic box",
          "mercury-gr": "Mercury with \"gr\"", "oscillator": "oscillator"}
+
+
+#: Pages without a gravitating pair, left out of the ratio to IAS15 that
+#: README.md, docs/results.md and the demo state.
+NO_GRAVITY = ("oscillator",)
+
+
+def ias15_ratio_range(folder: Path) -> Tuple[float, float]:
+    """(least, largest) ratio of pfvi's defaults' wall time to IAS15's, at
+    each of TARGETS that both reach, over the pages with gravity: the range
+    README.md, docs/results.md and rebound_pfvi.demo state (tests/test_docs.py
+    checks them against this)."""
+    ratios = []
+    for slug in PAGES:
+        path = folder / f"{slug}.json"
+        if slug in NO_GRAVITY or not path.exists():
+            continue
+        rows = [Run.from_dict(r) for r in json.loads(path.read_text())["rows"]]
+        for target in TARGETS:
+            best = report.fastest(rows, target)
+            if DEFAULT_LINE in best and "IAS15" in best:
+                ratios.append(best[DEFAULT_LINE].wall_s / best["IAS15"].wall_s)
+    if not ratios:
+        raise ValueError(f"{folder}: no page where both {DEFAULT_LINE} and IAS15 reach {TARGETS}")
+    return min(ratios), max(ratios)
 
 
 def _s(seconds: float) -> str:
@@ -67,6 +92,8 @@ def main() -> None:
                 if where not in wins.setdefault(r.family, []):
                     wins[r.family].append(where)
     print("\n".join(lines))
+    low, high = ias15_ratio_range(folder)
+    print(f"\npfvi's defaults at {low:.2f}-{high:.2f} times IAS15's wall time on the pages with gravity.")
     print("\nFastest or tied, per family:")
     for family, where in sorted(wins.items()):
         print(f"- {family}: {len(where)}: {', '.join(where)}")

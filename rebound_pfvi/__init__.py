@@ -17,8 +17,9 @@ scale. Importing this package registers the integrator "pfvi" with REBOUND::
     print(sim.integrator.n_steps)
 
 Options and statistics are integrator fields, saved in Simulationarchives
-(import rebound_pfvi before loading an archive that uses it). The list below
-is generated from the C core's own field list when the package is imported.
+(import rebound_pfvi before loading an archive that uses it: see
+Simulationarchives below). The lists below are generated from the C core's
+own field list when the package is imported.
 """
 import ctypes as _ctypes
 from typing import Any, Dict, Tuple
@@ -26,7 +27,8 @@ from typing import Any, Dict, Tuple
 from ._core import INTEGRATOR_NAME, lib as _lib
 
 __version__ = "0.1.0"
-__all__ = ["INTEGRATOR_NAME", "DEFAULTS", "FITTINGS", "FREQUENCIES", "CENTRES", "STEP_CONTROLS", "STAGES", "seed_coefficients",
+__all__ = ["INTEGRATOR_NAME", "DEFAULTS", "ARCHIVE_FAILURE", "ARCHIVE_RECIPE",
+           "FITTINGS", "FREQUENCIES", "CENTRES", "STEP_CONTROLS", "STAGES", "seed_coefficients",
            "gamma", "two_point_coefficients", "lobatto", "stage_coefficients", "stage_differentiation"]
 
 def _option_values(field):
@@ -123,7 +125,39 @@ def _show_options_and_statistics():
 
 
 _show_options_and_statistics()
-__doc__ = (__doc__ or "") + _fields_doc()
+#: Loading a Simulationarchive written with pfvi: what goes wrong without
+#: ``import rebound_pfvi`` and the recipe (help(rebound_pfvi), README.md and
+#: docs/integrator.md show it; tests/test_archive_recipe.py runs it).
+ARCHIVE_FAILURE = (
+    "REBOUND finds an integrator only once it is registered, and importing rebound_pfvi is what registers "
+    "\"pfvi\". Loaded in a process that has not imported it, an archive written with pfvi gives a "
+    "RuntimeWarning that \"The binary file seems to be corrupted\" (REBOUND skips the fields it does not "
+    "know), sim.integrator reads \"ias15\", and sim.integrate() raises \"RuntimeError: Integrator not "
+    "found.\" The fix: import rebound_pfvi before loading.")
+ARCHIVE_RECIPE = """\
+import rebound
+import rebound_pfvi  # registers "pfvi": import it before loading an archive written with it
+
+sim = rebound.Simulation()
+sim.add(m=1.0)
+sim.add(m=1e-3, a=1.0, e=0.5)
+sim.integrator = "pfvi"
+sim.save_to_file("pfvi-archive.bin", interval=1.0, delete_file=True)
+sim.integrate(3.0)
+
+loaded = rebound.Simulationarchive("pfvi-archive.bin")[-1]  # or rebound.Simulation("pfvi-archive.bin")
+print(loaded.integrator, loaded.t, loaded.integrator.n_steps == sim.integrator.n_steps)  # pfvi 3.0 True
+loaded.integrate(4.0)
+"""
+
+
+def _archive_doc() -> str:
+    """The module docstring's part on Simulationarchives."""
+    return ("\nSimulationarchives: " + ARCHIVE_FAILURE + " For example::\n\n"
+            + "".join(f"    {line}\n" if line else "\n" for line in ARCHIVE_RECIPE.splitlines()))
+
+
+__doc__ = (__doc__ or "") + _fields_doc() + _archive_doc()
 
 
 def _refuse_integers_that_wrap():

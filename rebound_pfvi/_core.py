@@ -1,14 +1,85 @@
 """Loads the C core, checks it against the running rebound, registers "pfvi".
 
-Everything here runs once per process, at the first ``import rebound_pfvi``.
+Everything here runs once per process, at the first ``import rebound_pfvi``:
+the running rebound is checked against the supported range before the core
+is loaded (a rebound 4.x lacks the functions the core links to), and against
+the version the core was compiled with after; either mismatch is an
+ImportError that names both versions and the command that rebuilds.
 """
 import ctypes
+import json
 import os
+import sys
 import sysconfig
+from importlib import metadata
+from typing import Optional
+from urllib.parse import unquote, urlparse
 
 import rebound
 
 INTEGRATOR_NAME = "pfvi"
+#: Why versions outside the supported range are excluded (the range itself is
+#: pyproject.toml's, read from the installed package's metadata).
+RANGE_REASON = ("4.x has no integrator registry; a rebound newer than the range is untested "
+                "until its headers are checked")
+
+
+def supported_range() -> Optional[str]:
+    """The rebound requirement of the installed rebound_pfvi (pyproject.toml's
+    [project] dependencies), e.g. ">=5.0,<5.3"; None when rebound_pfvi is not
+    installed (run from a source tree)."""
+    from packaging.requirements import Requirement
+
+    try:
+        requires = metadata.requires("rebound_pfvi") or []
+    except metadata.PackageNotFoundError:
+        return None
+    found = [r for r in map(Requirement, requires) if r.name == "rebound" and r.marker is None]
+    return str(found[0].specifier) if found else None
+
+
+def rebuild_command() -> str:
+    """The command that rebuilds rebound_pfvi against the running rebound: pip
+    on the source folder it was installed from, when pip recorded one."""
+    source = "<the rebound_pfvi source folder>"
+    try:
+        direct = json.loads(metadata.distribution("rebound_pfvi").read_text("direct_url.json") or "{}")
+    except (metadata.PackageNotFoundError, json.JSONDecodeError):
+        direct = {}
+    url = urlparse(direct.get("url", ""))
+    if "dir_info" in direct and url.scheme == "file":
+        source = unquote(url.path)
+    return f"{sys.executable} -m pip install --force-reinstall --no-deps {source}"
+
+
+def range_mismatch(running: str, supported: Optional[str]) -> Optional[str]:
+    """The error for a running rebound outside the supported range, or None."""
+    from packaging.specifiers import SpecifierSet
+
+    if supported is None or SpecifierSet(supported).contains(running, prereleases=True):
+        return None
+    return (f"rebound_pfvi supports rebound{supported} ({RANGE_REASON}), but rebound {running} is "
+            f"running. Install a rebound in the range and rebuild rebound_pfvi against it: "
+            f"{sys.executable} -m pip install 'rebound{supported}' && {rebuild_command()}")
+
+
+def abi_mismatch(compiled: str, running: str, running_c: str,
+                 sizes_compiled: tuple, sizes_running: tuple) -> Optional[str]:
+    """The error for a core compiled against another rebound than the running
+    one (its version, or the sizes of struct reb_simulation and reb_particle),
+    or None."""
+    if (compiled, sizes_compiled) == (running, sizes_running) and running_c == running:
+        return None
+    return (f"rebound_pfvi's C core was compiled against rebound {compiled} "
+            f"(sizeof(struct reb_simulation) = {sizes_compiled[0]}, sizeof(struct reb_particle) = "
+            f"{sizes_compiled[1]}) but rebound {running} (C library {running_c}, sizes "
+            f"{sizes_running[0]} and {sizes_running[1]}) is running. Rebuild rebound_pfvi against the "
+            f"running rebound: {rebuild_command()}")
+
+
+_error = range_mismatch(rebound.__version__, supported_range())
+if _error is not None:
+    raise ImportError(_error)
 
 _path = os.path.join(os.path.dirname(os.path.abspath(__file__)),
                      "_pfvi_core" + sysconfig.get_config_var("EXT_SUFFIX"))
@@ -16,7 +87,7 @@ try:
     lib = ctypes.CDLL(_path)
 except OSError as error:
     raise ImportError(f"rebound_pfvi: cannot load its C core {_path}: {error}. "
-                      "Reinstall rebound_pfvi (pip install .) so that the core is compiled.") from error
+                      f"Rebuild it against the running rebound {rebound.__version__}: {rebuild_command()}") from error
 
 lib.pfvi_rebound_version_compiled.restype = ctypes.c_char_p
 lib.pfvi_rebound_version_compiled.argtypes = []
@@ -52,22 +123,12 @@ lib.pfvi_two_point_coefficients.argtypes = [ctypes.c_double, ctypes.c_double, ct
 
 
 def _check_abi():
-    compiled = lib.pfvi_rebound_version_compiled().decode()
-    running = rebound.__version__
     running_c = ctypes.c_char_p.in_dll(rebound.clibrebound, "reb_version_str").value.decode()
-    size_compiled = lib.pfvi_sizeof_simulation()
-    size_running = ctypes.sizeof(rebound.Simulation)
-    particle_compiled = lib.pfvi_sizeof_particle()
-    particle_running = ctypes.sizeof(rebound.Particle)
-    if (compiled, size_compiled, particle_compiled) != (running, size_running, particle_running) \
-            or running_c != running:
-        raise ImportError(
-            f"rebound_pfvi was compiled against rebound {compiled} "
-            f"(sizeof(struct reb_simulation) = {size_compiled}, sizeof(struct reb_particle) = "
-            f"{particle_compiled}) but rebound {running} (C library {running_c}, sizes "
-            f"{size_running} and {particle_running}) is running. Install rebound=={compiled}, or "
-            "rebuild rebound_pfvi against the running rebound: "
-            "pip install --no-build-isolation --force-reinstall --no-deps <rebound_pfvi source>")
+    error = abi_mismatch(lib.pfvi_rebound_version_compiled().decode(), rebound.__version__, running_c,
+                         (lib.pfvi_sizeof_simulation(), lib.pfvi_sizeof_particle()),
+                         (ctypes.sizeof(rebound.Simulation), ctypes.sizeof(rebound.Particle)))
+    if error is not None:
+        raise ImportError(error)
 
 
 _check_abi()

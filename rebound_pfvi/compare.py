@@ -208,22 +208,6 @@ def _install_counter(sim: rebound.Simulation, scene: Scene, counter: List[int]) 
         sim.additional_forces = count
 
 
-#: What REBOUND's warnings mean for a run, for the page and the command line.
-WARNING_MEANINGS = {
-    "predictor corrector loops in IAS15 did not converge":
-        "IAS15's predictor-corrector iteration hit its limit in 10 or more steps, REBOUND's sign that the "
-        "steps are too long for the tolerance; the run went on, and its error is measured like any other",
-}
-
-
-def explain_warning(message: str) -> str:
-    """A REBOUND warning in the words of :data:`WARNING_MEANINGS` (else the message itself)."""
-    for key, meaning in WARNING_MEANINGS.items():
-        if key in message:
-            return meaning
-    return message
-
-
 def run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repeats: int = 3,
                 samples: int = 100, budget: Optional[float] = None) -> Run:
     """The run of `setting` on `scene` (see the module docstring).
@@ -372,16 +356,46 @@ class Results:
         return runs.count(self.rows)
 
     def to_dict(self) -> Dict[str, Any]:
-        """Everything the sweep found, as JSON-ready data (report.results_dict)."""
-        from .report import results_dict
+        """Everything the sweep found, as JSON-ready data (the page's .json)."""
+        from .units import REBOUND_UNITS
 
-        return results_dict(self)
+        own = getattr(self.scene, "unit_names", True) is None
+        unit_names = ("the simulation's own",) * 3 if own else REBOUND_UNITS
+        return {"scene": self.scene.name, "params": self.scene.params, "description": self.scene.describe(),
+                "t_end": self.scene.t_end, "period": self.scene.period,
+                "units": {"length": unit_names[0], "time": unit_names[1], "mass": unit_names[2],
+                          "wall_s": "s"},
+                "reference": {k: v for k, v in self.reference.items() if k in ("how", "uncertainty")},
+                "repeats": self.repeats, "samples": self.samples, "workers": self.workers,
+                "scheduler": self.scheduler, "budget_s": self.budget, "settings": len(self.settings),
+                "finished": self.finished,
+                "interrupted": self.interrupted, "sweep_wall_s": self.wall_s,
+                "rows": [r.to_dict() for r in self.rows]}
 
     def table(self) -> Any:
-        """The rows as an astropy QTable with Quantities (report.results_table)."""
-        from .report import results_table
+        """The rows as an astropy QTable, with Quantities: position error in AU
+        and km, wall time in s, the knob's step in yr for fixed-step runs."""
+        import astropy.units as u
+        from astropy.table import QTable
 
-        return results_table(self)
+        ok = [r for r in self.rows if r.status == "ok"]
+        t = QTable()
+        t["line"] = [r.label for r in ok]
+        t["knob"] = [r.knob for r in ok]
+        t["value"] = [r.value for r in ok]
+        t["steps"] = [r.steps for r in ok]
+        t["force_evaluations"] = [r.force_evaluations for r in ok]
+        t["wall_time"] = [r.wall_s for r in ok] << u.s
+        t["energy_error_max"] = [r.energy_error_max for r in ok]
+        t["energy_error_final"] = [r.energy_error_final for r in ok]
+        errors = [r.position_error for r in ok]
+        if getattr(self.scene, "unit_names", True) is None:  # a custom simulation in its own units
+            t["position_error"] = errors
+        else:
+            t["position_error"] = errors << u.AU
+            t["position_error_km"] = t["position_error"].to(u.km)
+        return t
+
 
 def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int = 3, samples: int = 100,
         workers: Optional[int] = None, scheduler: Any = None,

@@ -21,6 +21,11 @@ from .integrators import configure as configure_integrator, pfvi_options
 from .scenes import kepler_relative, orbit_elements
 
 M_PLANET = 1e-3
+#: pfvi's defaults' wall time over IAS15's at equal position error, least and
+#: largest over the pages of docs/results.md with gravity, as README.md
+#: states it: ``python3 -P benchmarks/pages_summary.py`` computes it from
+#: the pages' JSON, and tests/test_stated_figures.py checks all three agree.
+PAGES_IAS15_RATIO = (0.16, 0.77)
 
 
 def kepler_pair(e: float) -> rebound.Simulation:
@@ -93,5 +98,6 @@ def run_demo(orbits: float = 100, write: Callable[[str], Any] = print) -> List[D
             rows.append(row)
     write(f"pfvi's epsilon is a position error per orbit relative to the orbit's size: over {orbits} orbits "
           f"its defaults allow {1e-6 * orbits:.0e} of a; IAS15's default (epsilon 1e-9) overshoots its own "
-          "request. At equal error pfvi takes 0.2-0.9 of IAS15's time (docs/results.md).")
+          f"request. At equal error pfvi's defaults took {PAGES_IAS15_RATIO[0]:.2f}-{PAGES_IAS15_RATIO[1]:.2f} "
+          "of IAS15's wall time on the pages with gravity (docs/results.md).")
     return rows

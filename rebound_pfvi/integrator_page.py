@@ -1,8 +1,8 @@
 """docs/integrator.md, the integrator's page in the form of REBOUND's own
 integrator pages (what it is, when to use it, references, its fields with
-types, values and defaults, an example), generated from the C core: the
-description and every field's text are the strings ``help(sim.integrator)``
-prints, the defaults are :data:`rebound_pfvi.DEFAULTS`, the values the core's
+types, values and defaults, an example, loading an archive), generated from
+the C core: the description and every field's text are the strings
+``help(sim.integrator)`` prints, the defaults are :data:`rebound_pfvi.DEFAULTS`, the values the core's
 option lists. Rewrite the page after changing the core::
 
     python3 -P -m rebound_pfvi.integrator_page docs/integrator.md
@@ -122,6 +122,8 @@ def _cell(text: str) -> str:
 
 def page() -> str:
     """docs/integrator.md as the core describes the integrator today."""
+    from . import ARCHIVE_FAILURE, ARCHIVE_RECIPE
+
     everything = fields()
     lines = ["# The pfvi integrator", "",
              "*Generated from the C core by `python3 -P -m rebound_pfvi.integrator_page docs/integrator.md`: "
@@ -144,6 +146,7 @@ def page() -> str:
         if f.statistic:
             lines.append(f"| `{f.name}` | {f.type} | {_cell(f.documentation)} |")
     lines += ["", "## Example", "", "```python", EXAMPLE.rstrip("\n"), "```", ""]
+    lines += ["## Simulationarchives", "", ARCHIVE_FAILURE, "", "```python", ARCHIVE_RECIPE.rstrip("\n"), "```", ""]
     return "\n".join(lines)
 
 

@@ -232,7 +232,7 @@ def conclusions_section(results: Results, floor: float = 0.0, length: str = "AU"
 
 def warnings_section(rows: Iterable[Run]) -> str:
     """REBOUND's warnings, each explained once, with the runs that raised it."""
-    from .compare import explain_warning
+    from .runs import explain_warning
 
     by_message: Dict[str, List[str]] = {}
     for r in rows:
@@ -372,49 +372,6 @@ particle from its reference position at t_end (Kepler: of the relative position)
         f.write(text)
     paths["md"] = base + ".md"
     return paths
-
-
-def results_dict(results: Results) -> Dict[str, Any]:
-    """Everything a sweep found, as JSON-ready data."""
-    from .units import REBOUND_UNITS
-
-    own = getattr(results.scene, "unit_names", True) is None
-    unit_names = ("the simulation's own",) * 3 if own else REBOUND_UNITS
-    return {"scene": results.scene.name, "params": results.scene.params, "description": results.scene.describe(),
-            "t_end": results.scene.t_end, "period": results.scene.period,
-            "units": {"length": unit_names[0], "time": unit_names[1], "mass": unit_names[2],
-                      "wall_s": "s"},
-            "reference": {k: v for k, v in results.reference.items() if k in ("how", "uncertainty")},
-            "repeats": results.repeats, "samples": results.samples, "workers": results.workers,
-            "scheduler": results.scheduler, "budget_s": results.budget, "settings": len(results.settings),
-            "finished": results.finished,
-            "interrupted": results.interrupted, "sweep_wall_s": results.wall_s,
-            "rows": [r.to_dict() for r in results.rows]}
-
-
-def results_table(results: Results) -> Any:
-    """The rows as an astropy QTable, with Quantities: position error in AU
-    and km, wall time in s, the knob's step in yr for fixed-step runs."""
-    import astropy.units as u
-    from astropy.table import QTable
-
-    ok = [r for r in results.rows if r.status == "ok"]
-    t = QTable()
-    t["line"] = [r.label for r in ok]
-    t["knob"] = [r.knob for r in ok]
-    t["value"] = [r.value for r in ok]
-    t["steps"] = [r.steps for r in ok]
-    t["force_evaluations"] = [r.force_evaluations for r in ok]
-    t["wall_time"] = [r.wall_s for r in ok] << u.s
-    t["energy_error_max"] = [r.energy_error_max for r in ok]
-    t["energy_error_final"] = [r.energy_error_final for r in ok]
-    errors = [r.position_error for r in ok]
-    if getattr(results.scene, "unit_names", True) is None:  # a custom simulation in its own units
-        t["position_error"] = errors
-    else:
-        t["position_error"] = errors << u.AU
-        t["position_error_km"] = t["position_error"].to(u.km)
-    return t
 
 
 # --- the stability report (rebound-pfvi stability) ---------------------------

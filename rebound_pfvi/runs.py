@@ -168,6 +168,22 @@ class Run:
         return self.to_dict().get(key, default)
 
 
+#: What REBOUND's warnings mean for a run, for the page and the command line.
+WARNING_MEANINGS = {
+    "predictor corrector loops in IAS15 did not converge":
+        "IAS15's predictor-corrector iteration hit its limit in 10 or more steps, REBOUND's sign that the "
+        "steps are too long for the tolerance; the run went on, and its error is measured like any other",
+}
+
+
+def explain_warning(message: str) -> str:
+    """A REBOUND warning in the words of :data:`WARNING_MEANINGS` (else the message itself)."""
+    for key, meaning in WARNING_MEANINGS.items():
+        if key in message:
+            return meaning
+    return message
+
+
 def failed_status(outcome: Outcome) -> str:
     """The status of a run whose process did not return it (:data:`rebound_pfvi.runner.Outcome`)."""
     kind, detail = outcome

@@ -3,9 +3,26 @@ import ctypes
 import math
 from fractions import Fraction
 
+import pytest
 import rebound
 
 import rebound_pfvi  # noqa: F401  (registers "pfvi")
+
+
+def _python_heartbeat_settable():
+    try:
+        rebound.Simulation().heartbeat = lambda simp: None
+    except AttributeError:
+        return False
+    return True
+
+
+#: True where REBOUND's Python Simulation takes a heartbeat: before 5.2.2 its
+#: __slots__ have no room for the callback (``sim.heartbeat = f`` raises
+#: AttributeError: '_hb'), REBOUND's own limit, not pfvi's.
+PYTHON_HEARTBEAT = _python_heartbeat_settable()
+needs_python_heartbeat = pytest.mark.skipif(
+    not PYTHON_HEARTBEAT, reason=f"rebound {rebound.__version__} cannot set sim.heartbeat from Python (fixed in 5.2.2)")
 
 
 def particle_bytes(sim):

@@ -1,5 +1,6 @@
 """Simulationarchive round trips, registration once per process, relocatable install."""
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -153,10 +154,35 @@ def test_installed_package_still_imports_after_being_moved(tmp_path):
     assert result.stdout.strip() == "100"
 
 
-def test_abi_check_names_both_versions(monkeypatch):
+def test_abi_check_refuses_a_core_built_against_another_rebound(monkeypatch):
+    core = rebound_pfvi._core
+    rebuild = f"{sys.executable} -m pip install --force-reinstall --no-deps "
+    # Simulated: a core compiled against 5.1.1 under a running 5.2.2 (the
+    # sizes alike: the versions alone are refused).
+    message = core.abi_mismatch("5.1.1", "5.2.2", "5.2.2", (816, 112), (816, 112))
+    assert message.startswith("rebound_pfvi's C core was compiled against rebound 5.1.1 "
+                              "(sizeof(struct reb_simulation) = 816, sizeof(struct reb_particle) = 112) "
+                              "but rebound 5.2.2 (C library 5.2.2, sizes 816 and 112) is running. "
+                              "Rebuild rebound_pfvi against the running rebound: " + rebuild), message
+    # A size alone, or the Python package and its C library disagreeing.
+    assert core.abi_mismatch("5.2.2", "5.2.2", "5.2.2", (816, 112), (824, 112)) is not None
+    assert core.abi_mismatch("5.2.2", "5.2.2", "5.1.1", (816, 112), (816, 112)) is not None
+    assert core.abi_mismatch("5.2.2", "5.2.2", "5.2.2", (816, 112), (816, 112)) is None
+    # The real check, the running version simulated.
+    compiled = core.lib.pfvi_rebound_version_compiled().decode()
+    assert compiled == rebound.__version__  # this build passed it
     monkeypatch.setattr(rebound, "__version__", "9.9.9")
-    with pytest.raises(ImportError, match=r"compiled against rebound 5\.2\.2 .* but rebound 9\.9\.9"):
-        rebound_pfvi._core._check_abi()
+    with pytest.raises(ImportError, match=rf"compiled against rebound {re.escape(compiled)} .* but rebound "
+                                          rf"9\.9\.9 .*{re.escape(rebuild)}"):
+        core._check_abi()
+
+
+def test_rebuild_command_names_the_source_folder_pip_recorded():
+    command = rebound_pfvi._core.rebuild_command()
+    assert command.startswith(f"{sys.executable} -m pip install --force-reinstall --no-deps ")
+    source = command.split()[-1]
+    if source != "folder>":  # installed from a folder: pip's direct_url.json names it
+        assert os.path.isfile(os.path.join(source, "pyproject.toml")), source
 
 
 def test_documentation_lists_every_field():

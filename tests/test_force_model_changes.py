@@ -13,7 +13,7 @@ import math
 import pytest
 import rebound
 
-from conftest import STEP_MODES, particle_bytes, snapshot, three_bodies
+from conftest import STEP_MODES, needs_python_heartbeat, particle_bytes, snapshot, three_bodies
 
 #: Every step mode of the fault tests, and the other stage counts with fixed steps.
 MODES = dict(STEP_MODES, **{f"fixed-s{s}": (s, 0.0, "reversible") for s in (3, 5, 6)})
@@ -98,6 +98,7 @@ def test_a_force_model_change_between_steps_calls_equals_a_fresh_integrate(mode,
     assert numbers(unchanged) != numbers(a)
 
 
+@needs_python_heartbeat
 @pytest.mark.parametrize("mode", MODES)
 @pytest.mark.parametrize("change", ["softening", "additional_forces", "G"])
 def test_a_force_model_change_in_a_heartbeat_equals_a_fresh_integrate(mode, change):
@@ -125,6 +126,7 @@ def test_a_force_model_change_in_a_heartbeat_equals_a_fresh_integrate(mode, chan
     assert numbers(reference) != numbers(a)
 
 
+@needs_python_heartbeat
 @pytest.mark.parametrize("mode", ["fixed-s2", "fixed-s4"])
 def test_the_start_force_is_reused_only_within_one_call_without_a_heartbeat(mode):
     # What the check costs: one force evaluation per steps() call, and one per

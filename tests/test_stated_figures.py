@@ -1,0 +1,83 @@
+"""Figures the prose states, tied to where they come from (issue 37): every
+run time README.md and docs/*.md state names the command that produced it
+beside it, and the ratio to IAS15 that README.md, docs/results.md,
+docs/adaptive.md and the demo state is the one the pages' JSON give."""
+import re
+import sys
+from pathlib import Path
+
+import pytest
+
+from rebound_pfvi import demo
+
+ROOT = Path(__file__).resolve().parent.parent
+PAGES = [ROOT / "README.md"] + sorted((ROOT / "docs").glob("*.md"))
+
+_DURATION = r"(?:about\s|in\s)?\d+(?:\.\d+)?(?:(?:\sto\s|-)\d+(?:\.\d+)?)?\s?(?:s|min|minutes|seconds|h|hours)\b"
+#: A stated run time: a duration "on N cores / workers", one in a comment of
+#: a command line, "about N s", or "N min".
+RUN_TIME = re.compile(
+    _DURATION + r"(?=[^.;|]{0,40}?\bon\s\d+\s(?:cores?|workers?|worker\sprocess(?:es)?|worker\(s\))\b)"
+    r"|# [^#\n]*?\b\d+(?:\.\d+)? ?(?:s|min)\b"
+    r"|\babout\s\d+(?:\.\d+)?\s?(?:s|min|minutes)\b"
+    r"|\b\d+\smin(?:\s\d+\ss)?\b")
+COMMAND = re.compile(r"\b(?:python3?|rebound-pfvi|bash|pytest|jupyter|pip) ")
+
+
+def units(text):
+    """Paragraphs, each with the code block that follows it (the command a
+    sentence like "Install and run the tests (about 100 s ...):" introduces)."""
+    out = []
+    for block in re.split(r"\n\s*\n", text):
+        lines = [line for line in block.splitlines() if line.strip()]
+        code = block.lstrip("\n").startswith("```") or (lines and all(line.startswith("    ") for line in lines))
+        if code and out:
+            out[-1] += "\n" + block
+        else:
+            out.append(block)
+    return out
+
+
+def stated_run_times(text):
+    """(statement, has a command beside it) for each stated run time."""
+    found = []
+    for unit in units(text):
+        for match in RUN_TIME.finditer(unit):
+            found.append((" ".join(match.group(0).split()), bool(COMMAND.search(unit))))
+    return found
+
+
+def test_the_check_finds_run_times_and_their_commands():
+    text = ("Install and run the tests (about 100 s on 2\ncores):\n\n    python3 -m pytest tests\n\n"
+            "    rebound-pfvi compare --scene kepler   # 17 s\n\n"
+            "The sweep took 58\ns on 2 cores.\n\n"
+            "Errors of 1e-10 AU in 0.0073 s per run.\n")
+    assert stated_run_times(text) == [("about 100 s", True), ("# 17 s", True), ("58 s", False)]
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_every_stated_run_time_names_its_command(page):
+    bare = [said for said, named in stated_run_times(page.read_text(encoding="utf-8")) if not named]
+    assert bare == [], f"{page.name}: run times without the command that produced them: {bare}"
+
+
+def test_readme_states_run_times():
+    assert len(stated_run_times((ROOT / "README.md").read_text(encoding="utf-8"))) >= 8
+
+
+def test_the_ratio_to_ias15_is_the_pages_one_everywhere():
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        import pages_summary
+    finally:
+        sys.path.remove(str(ROOT / "benchmarks"))
+    low, high = pages_summary.ias15_ratio_range(ROOT / "docs" / "results")
+    stated = f"{low:.2f}-{high:.2f}"
+    assert f"{demo.PAGES_IAS15_RATIO[0]:.2f}-{demo.PAGES_IAS15_RATIO[1]:.2f}" == stated, (
+        f"the pages give {stated}: update rebound_pfvi.demo.PAGES_IAS15_RATIO, README.md and docs")
+    assert f"{stated} times IAS15's wall time on all 13 pages with gravity" in (ROOT / "README.md").read_text()
+    assert f"takes {stated} times IAS15's wall time" in (ROOT / "docs" / "results.md").read_text()
+    assert f"{stated}x IAS15's wall time" in " ".join((ROOT / "docs" / "adaptive.md").read_text().split())
+    lines = []
+    demo.run_demo(orbits=1, write=lines.append)
+    assert f"took {stated} of IAS15's wall time" in lines[-1]
