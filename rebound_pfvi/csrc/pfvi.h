@@ -826,6 +826,8 @@ struct pfvi_state {
     size_t var_N;                  // r->N_var of the step being taken (0: none)
     size_t var_allocated;
     size_t* var_real;              // the real particle whose fit each one's tangent step uses
+    size_t* var_sets;              // the first of each set of N (a variation of every particle)
+    size_t var_sets_N;
     struct reb_particle* var_start;// bit-exact copy at the step's start (rollback)
     struct pfvi_end_state* var_end;// as the last step left them, with their accelerations (force reuse)
     size_t var_end_N;              // >0: var_end holds them
@@ -939,6 +941,8 @@ struct pfvi_solve_ops {
     // The iterate whose stage points are solve_x, for the particles whose
     // form can take it (the others keep theirs).
     void (*start_at)(struct pfvi_state* st, size_t N);
+    // The variational particles' change in the round just made (their own verdict's).
+    void (*variational_change)(struct pfvi_state* st);
 };
 // Where a scheme's first iterate came from: the last trial of this same step
 // (a retry: kept), or the last step's stages (extrapolated), or neither.
@@ -960,6 +964,11 @@ PFVI_INTERNAL int pfvi_newton_prepare(struct pfvi_state* st, size_t N, const str
 // yn <- y + M^-1 (yn - y) for every unit.
 PFVI_INTERNAL void pfvi_newton_correct(struct pfvi_state* st, size_t N, const double (*y)[PFVI_STAGES_MAX-1][3],
         double (*yn)[PFVI_STAGES_MAX-1][3]);
+// The same for the variational particles (var_unknowns -> var_unknowns_next):
+// their tangent equations are linear, with the real stages' Jacobian, so the
+// real units' factors correct them (a set of N variations as the real
+// particles are; a test particle's variation alone, about a fixed centre).
+PFVI_INTERNAL void pfvi_newton_correct_variational(struct pfvi_state* st, size_t N);
 // The rounds from the first iterate in st->unknowns to convergence: OK
 // (unknowns converged, stage_a and stage_x at its stage points, every
 // stage), NOT_CONVERGED, or ERROR (rolled back, fault recorded).

@@ -488,63 +488,97 @@ int pfvi_newton_prepare(struct pfvi_state* st, size_t N, const struct pfvi_field
     return factored;
 }
 
-void pfvi_newton_correct(struct pfvi_state* st, size_t N, const double (*y)[PFVI_STAGES_MAX-1][3],
-        double (*yn)[PFVI_STAGES_MAX-1][3]){
-    const struct pfvi_newton* const nw = st->newton;
-    for (size_t o=0; o<N; o++){
-        const size_t i = st->newton_order[o];
-        const struct pfvi_newton* const u = &nw[i];
-        if (u->kind == PFVI_NEWTON_NONE || u->kind == PFVI_NEWTON_MEMBER){
-            continue;   // the plain round (members: with their pair)
+// One unit's correction (body i of the real order) on the iterates y -> yn
+// of the particles at index base + i (base 0: the real ones; a variational
+// set's first; with alone, a test particle's variation at index `alone`,
+// corrected without its centre's).
+static void newton_correct_unit(struct pfvi_state* st, size_t i, const double (*y)[PFVI_STAGES_MAX-1][3],
+        double (*yn)[PFVI_STAGES_MAX-1][3], size_t base, size_t alone){
+    const struct pfvi_newton* const u = &st->newton[i];
+    if (u->kind == PFVI_NEWTON_NONE || u->kind == PFVI_NEWTON_MEMBER){
+        return;   // the plain round (members: with their pair)
+    }
+    const struct pfvi_solve_form* const f = st->solve_form[i];
+    const int m = f->m;
+    const size_t p = u->partner;
+    const size_t vi = (alone != SIZE_MAX) ? alone : base + i;
+    double b[PFVI_STAGES_MAX-1][3];
+    if (u->kind == PFVI_NEWTON_PAIR){
+        if (alone != SIZE_MAX){
+            return;   // (a pair's member has no variation alone)
         }
-        const struct pfvi_solve_form* const f = st->solve_form[i];
-        const int m = f->m;
-        const size_t p = u->partner;
-        double b[PFVI_STAGES_MAX-1][3];
-        if (u->kind == PFVI_NEWTON_PAIR){
-            // Relative coordinate by Newton, barycentre by the round.
-            const double mi = st->start[i].m, mp = st->start[p].m, M = mi + mp;
-            for (int l=0; l<m; l++){
-                for (int c=0; c<3; c++){
-                    b[l][c] = (yn[i][l][c] - y[i][l][c]) - (yn[p][l][c] - y[p][l][c]);
-                }
-            }
-            newton_apply(f, u, b);
-            for (int l=0; l<m; l++){
-                for (int c=0; c<3; c++){
-                    const double bi = yn[i][l][c] - y[i][l][c], bp = yn[p][l][c] - y[p][l][c];
-                    const double cm = (mi*bi + mp*bp)/M;
-                    yn[i][l][c] = y[i][l][c] + (cm + (mp/M)*b[l][c]);
-                    yn[p][l][c] = y[p][l][c] + (cm - (mi/M)*b[l][c]);
-                }
-            }
-            continue;
-        }
+        // Relative coordinate by Newton, barycentre by the round.
+        const size_t vp = base + p;
+        const double mi = st->start[i].m, mp = st->start[p].m, M = mi + mp;
         for (int l=0; l<m; l++){
             for (int c=0; c<3; c++){
-                b[l][c] = yn[i][l][c] - y[i][l][c];
+                b[l][c] = (yn[vi][l][c] - y[vi][l][c]) - (yn[vp][l][c] - y[vp][l][c]);
             }
-        }
-        if (st->newton_index[p] < st->newton_index[i]
-                && (u->companion == SIZE_MAX || st->newton_index[u->companion] < st->newton_index[i])){
-            // The centre's correction, final in this round: it was placed first.
-            // (Its bodies share one form when they are a pair; alone, p has its own.)
-            double Dc[PFVI_STAGES_MAX-1][3];
-            const struct pfvi_solve_form* const fp = st->solve_form[p];
-            const size_t q = u->companion;
-            const double w = (q == SIZE_MAX) ? 0. : st->start[q].m/(st->start[p].m + st->start[q].m);
-            for (int l=0; l<fp->m; l++){
-                for (int c=0; c<3; c++){
-                    const double dp = yn[p][l][c] - y[p][l][c];
-                    Dc[l][c] = (q == SIZE_MAX) ? dp : (1. - w)*dp + w*(yn[q][l][c] - y[q][l][c]);
-                }
-            }
-            newton_cross(f, u, fp, (const double (*)[3])Dc, b);
         }
         newton_apply(f, u, b);
         for (int l=0; l<m; l++){
             for (int c=0; c<3; c++){
-                yn[i][l][c] = y[i][l][c] + b[l][c];
+                const double bi = yn[vi][l][c] - y[vi][l][c], bp = yn[vp][l][c] - y[vp][l][c];
+                const double cm = (mi*bi + mp*bp)/M;
+                yn[vi][l][c] = y[vi][l][c] + (cm + (mp/M)*b[l][c]);
+                yn[vp][l][c] = y[vp][l][c] + (cm - (mi/M)*b[l][c]);
+            }
+        }
+        return;
+    }
+    for (int l=0; l<m; l++){
+        for (int c=0; c<3; c++){
+            b[l][c] = yn[vi][l][c] - y[vi][l][c];
+        }
+    }
+    if (alone == SIZE_MAX && st->newton_index[p] < st->newton_index[i]
+            && (u->companion == SIZE_MAX || st->newton_index[u->companion] < st->newton_index[i])){
+        // The centre's correction, final in this round: it was placed first.
+        // (Its bodies share one form when they are a pair; alone, p has its own.)
+        double Dc[PFVI_STAGES_MAX-1][3];
+        const struct pfvi_solve_form* const fp = st->solve_form[p];
+        const size_t q = u->companion;
+        const double w = (q == SIZE_MAX) ? 0. : st->start[q].m/(st->start[p].m + st->start[q].m);
+        for (int l=0; l<fp->m; l++){
+            for (int c=0; c<3; c++){
+                const double dp = yn[base + p][l][c] - y[base + p][l][c];
+                Dc[l][c] = (q == SIZE_MAX) ? dp : (1. - w)*dp + w*(yn[base + q][l][c] - y[base + q][l][c]);
+            }
+        }
+        newton_cross(f, u, fp, (const double (*)[3])Dc, b);
+    }
+    newton_apply(f, u, b);
+    for (int l=0; l<m; l++){
+        for (int c=0; c<3; c++){
+            yn[vi][l][c] = y[vi][l][c] + b[l][c];
+        }
+    }
+}
+
+void pfvi_newton_correct(struct pfvi_state* st, size_t N, const double (*y)[PFVI_STAGES_MAX-1][3],
+        double (*yn)[PFVI_STAGES_MAX-1][3]){
+    for (size_t o=0; o<N; o++){
+        newton_correct_unit(st, st->newton_order[o], y, yn, 0, SIZE_MAX);
+    }
+}
+
+void pfvi_newton_correct_variational(struct pfvi_state* st, size_t N){
+    const double (*y)[PFVI_STAGES_MAX-1][3] = (const double (*)[PFVI_STAGES_MAX-1][3])st->var_unknowns;
+    double (*yn)[PFVI_STAGES_MAX-1][3] = st->var_unknowns_next;
+    for (size_t set=0; set<st->var_sets_N; set++){
+        for (size_t o=0; o<N; o++){
+            newton_correct_unit(st, st->newton_order[o], y, yn, st->var_sets[set], SIZE_MAX);
+        }
+    }
+    if (st->var_sets_N*N < st->var_N){
+        // Test particles' variations (each alone: no other body's varies).
+        for (size_t v=0; v<st->var_N; v++){
+            int in_set = 0;
+            for (size_t set=0; set<st->var_sets_N; set++){
+                in_set |= (v >= st->var_sets[set] && v < st->var_sets[set] + N);
+            }
+            if (!in_set){
+                newton_correct_unit(st, st->var_real[v], y, yn, 0, v);
             }
         }
     }
@@ -661,6 +695,11 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
             change = change_of(st, N);
         }else{
             change = residual;
+        }
+        if (st->var_N){
+            // (the variational particles' Jacobian is the real one's, refreshed or not)
+            pfvi_newton_correct_variational(st, N);
+            ops->variational_change(st);
         }
         const enum pfvi_solve_next next = pfvi_solve_verdict(change, previous, rounds >= PFVI_ITERATION_MAX);
         if (next == PFVI_SOLVE_FAILED){

@@ -614,6 +614,7 @@ static int stages_advance_variational(struct reb_simulation* r, struct pfvi_stat
         for (size_t v=0; v<nv; v++){
             var_round(st, v, s, h, hb);
         }
+        pfvi_newton_correct_variational(st, N);
         change = var_change(st, s);
         verdict = pfvi_iteration_verdict(change, previous, rounds >= PFVI_ITERATION_MAX);
     }
@@ -761,11 +762,18 @@ static void stage_solve_start_at(struct pfvi_state* st, size_t N){
     }
 }
 
+// The variational particles' change after the solve corrected their round
+// (it replaces the round's own; the one before stays).
+static void stage_solve_variational_change(struct pfvi_state* st){
+    st->var_solve_change = var_change(st, st->rule.s);
+}
+
 static const struct pfvi_solve_ops stage_solve_ops = {
     .forces = stage_solve_forces,
     .round = stage_rounds,
     .positions = stage_solve_positions,
     .start_at = stage_solve_start_at,
+    .variational_change = stage_solve_variational_change,
 };
 
 static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h){

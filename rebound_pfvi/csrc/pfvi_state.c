@@ -47,6 +47,7 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->newton_mark);
     free(st->origin);
     free(st->var_real);
+    free(st->var_sets);
     free(st->var_start);
     free(st->var_end);
     free(st->var_stage_a);
@@ -141,6 +142,7 @@ int pfvi_var_scratch(struct pfvi_state* st, size_t n){
     }
     int ok = 1;
     st->var_real = pfvi_grow(st->var_real, n*sizeof(*st->var_real), &ok);
+    st->var_sets = pfvi_grow(st->var_sets, n*sizeof(*st->var_sets), &ok);
     st->var_start = pfvi_grow(st->var_start, n*sizeof(*st->var_start), &ok);
     st->var_end = pfvi_grow(st->var_end, n*sizeof(*st->var_end), &ok);
     st->var_stage_a = pfvi_grow(st->var_stage_a, n*sizeof(*st->var_stage_a), &ok);
@@ -166,6 +168,7 @@ int pfvi_var_scratch(struct pfvi_state* st, size_t n){
 int pfvi_var_map(const struct reb_simulation* r, struct pfvi_state* st){
     const size_t N = r->N, n = r->N_var;
     size_t covered = 0;
+    st->var_sets_N = 0;
     for (size_t v=0; v<r->N_var_config; v++){
         const struct reb_variational_configuration* const vc = &r->var_config[v];
         if (vc->index < 0){
@@ -185,6 +188,7 @@ int pfvi_var_map(const struct reb_simulation* r, struct pfvi_state* st){
             for (size_t i=0; i<N; i++){
                 st->var_real[first + i] = i;
             }
+            st->var_sets[st->var_sets_N++] = first;
             covered += N;
         }
     }
