@@ -210,7 +210,8 @@ def main():
         for kind, best, info in timing_rows(args.baseline, args.repeats):
             lines.append(f"| {kind} | {best['this build']:.0f} | {info['this build'][1]:.2f} | {best['baseline']:.0f} "
                          f"| {info['baseline'][1]:.2f} | {best['this build'] / best['baseline']:.2f} |")
-    lines += ["", f"({time.time() - started:.0f} s on {args.workers} workers.)", ""]
+    lines += ["", f"(`python -P benchmarks/solve.py --orbits {args.orbits:g}` took {time.time() - started:.0f} s "
+              f"on {args.workers} workers.)", ""]
     text = "\n".join(lines)
     if args.output:
         with open(args.output, "w") as f:

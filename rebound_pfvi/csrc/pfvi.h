@@ -769,6 +769,7 @@ struct pfvi_state {
     size_t* newton_order;
     size_t* newton_index;
     unsigned char* newton_mark;
+    double* solve_scale;           // each body's distance from its centre at the step's start
     double var_solve_change;       // the variational particles' last two changes in the solve's rounds
     double var_solve_previous;
     // The last step's stage accelerations seed the next solve if it starts
@@ -950,9 +951,9 @@ enum { PFVI_PREDICTED_NONE = 0, PFVI_PREDICTED_RETRY = 1, PFVI_PREDICTED_EXTRAPO
 enum pfvi_solve_next { PFVI_SOLVE_ITERATE = 0, PFVI_SOLVE_FINAL = 1, PFVI_SOLVE_CONVERGED = 2,
     PFVI_SOLVE_DIVERGING = 3, PFVI_SOLVE_FAILED = -1 };
 // The largest change of one particle's unknowns y -> yn, relative to the
-// larger of |q0| and its step's increment y[increment]; NaN kept.
+// larger of |q0|, its step's increment y[increment] and scale; NaN kept.
 PFVI_INTERNAL double pfvi_solve_change(const double (*y)[3], const double (*yn)[3], const double* q0,
-        int increment, int s);
+        int increment, int s, double scale);
 // The stop rule (PFVI_SOLVE_RESOLUTION): after a correction of size change
 // following one of size previous.
 PFVI_INTERNAL enum pfvi_solve_next pfvi_solve_verdict(double change, double previous, int last_round);

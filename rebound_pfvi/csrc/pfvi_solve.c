@@ -586,8 +586,9 @@ void pfvi_newton_correct_variational(struct pfvi_state* st, size_t N){
 
 /* ------------------------------------------------ the rounds and their stop */
 
-double pfvi_solve_change(const double (*y)[3], const double (*yn)[3], const double* q0, int increment, int s){
-    double scale = 0., diff = 0.;
+double pfvi_solve_change(const double (*y)[3], const double (*yn)[3], const double* q0, int increment, int s,
+        double scale){
+    double diff = 0.;
     for (int c=0; c<3; c++){
         const double q = fabs(q0[c]), d = fabs(y[increment][c]);
         scale = (q > scale) ? q : scale;
@@ -602,13 +603,37 @@ double pfvi_solve_change(const double (*y)[3], const double (*yn)[3], const doub
     return (scale > 0.) ? diff/scale : diff;
 }
 
+// Each body's length scale for its change: its distance from its centre at
+// the step's start (0 without one; the change is taken relative to the
+// larger of it, |q_k| and the step). Round-off in the forces on a body is of
+// that distance times the doubles' resolution: a star at 1e-3 AU from the
+// barycentre, its planet at 1 AU, need not have its position converged to
+// 1e-19 AU, which the forces do not resolve (and a body exactly at the
+// origin, the centre of a symmetric ring, to 0).
+static void solve_scales(struct pfvi_state* st, size_t N, const struct pfvi_field* field){
+    for (size_t i=0; i<N; i++){
+        st->solve_scale[i] = 0.;
+        if (st->newton[i].partner == SIZE_MAX){
+            continue;
+        }
+        const struct centre_ref c = centre_of(st, field, i);
+        double xc[3], vc[3], ac[3];
+        centre_start(&c, st, xc, vc, ac);
+        const struct reb_particle* const p = &st->start[i];
+        const double r[3] = {fabs(p->x - xc[0]), fabs(p->y - xc[1]), fabs(p->z - xc[2])};
+        const double largest = fmax(r[0], fmax(r[1], r[2]));
+        st->solve_scale[i] = isfinite(largest) ? largest : 0.;
+    }
+}
+
 // The largest relative change of the real particles' unknowns (a NaN is kept).
 static double change_of(const struct pfvi_state* st, size_t N){
     const int s = st->rule.s;
     double change = 0.;
     for (size_t i=0; i<N; i++){
         const double relative = pfvi_solve_change((const double (*)[3])st->unknowns[i],
-                (const double (*)[3])st->unknowns_next[i], st->stage_start[i].q0, st->solve_form[i]->increment, s);
+                (const double (*)[3])st->unknowns_next[i], st->stage_start[i].q0, st->solve_form[i]->increment, s,
+                st->solve_scale[i]);
         change = (relative > change || relative != relative) ? relative : change;
     }
     return change;
@@ -660,6 +685,7 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
         end_free = (st->solve_form[i]->k_last < s - 1);
     }
     newton_order(st, N, &field);
+    solve_scales(st, N, &field);
     if (predicted != PFVI_PREDICTED_RETRY){
         pfvi_solve_predict(st, N, &field, h, predicted == PFVI_PREDICTED_EXTRAPOLATED);
         ops->start_at(st, N);

@@ -540,7 +540,7 @@ static double var_change(const struct pfvi_state* st, int s){
     for (size_t v=0; v<st->var_N; v++){
         const int increment = st->stage_fit[st->var_real[v]].classical ? s - 2 : 0;
         const double relative = pfvi_solve_change((const double (*)[3])st->var_unknowns[v],
-                (const double (*)[3])st->var_unknowns_next[v], st->var_stage_start[v].q0, increment, s);
+                (const double (*)[3])st->var_unknowns_next[v], st->var_stage_start[v].q0, increment, s, 0.);
         change = (relative > change || relative != relative) ? relative : change;
     }
     return change;

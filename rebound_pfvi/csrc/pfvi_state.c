@@ -45,6 +45,7 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->newton_order);
     free(st->newton_index);
     free(st->newton_mark);
+    free(st->solve_scale);
     free(st->origin);
     free(st->var_real);
     free(st->var_sets);
@@ -122,6 +123,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->newton_order = pfvi_grow(st->newton_order, N*sizeof(*st->newton_order), &ok);
     st->newton_index = pfvi_grow(st->newton_index, N*sizeof(*st->newton_index), &ok);
     st->newton_mark = pfvi_grow(st->newton_mark, N*sizeof(*st->newton_mark), &ok);
+    st->solve_scale = pfvi_grow(st->solve_scale, N*sizeof(*st->solve_scale), &ok);
     if (st->predictor_N > N){
         // Only after a Simulationarchive load with fewer particles: the buffer
         // now holds N; an archive must never write more than it holds.
