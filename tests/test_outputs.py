@@ -217,3 +217,31 @@ def kepler_planets():
     sim.move_to_com()
     sim.integrator = "pfvi"
     return sim
+
+
+def test_a_refused_step_after_an_output_leaves_the_output_shown():
+    # The force turns non-finite (a callback pfvi cannot see change) while
+    # an output is shown: an output inside the step is refused with the
+    # simulation as the call found it, bit for bit; a call past the step
+    # takes up the run's state (a step of its own), then refuses the next.
+    broken = {"on": False}
+
+    def force(sim_pointer):
+        if broken["on"]:
+            sim_pointer.contents.particles[1].ax = float("nan")
+
+    sim = kepler()
+    sim.additional_forces = force
+    sim.integrate(1.0)
+    t_real = sim.integrator.output_t_real
+    before = (sim.t, state(sim).tobytes())
+    broken["on"] = True
+    with pytest.raises(RuntimeError):
+        sim.integrate(0.5*(1.0 + t_real))
+    assert (sim.t, state(sim).tobytes()) == before
+    with pytest.raises(RuntimeError):
+        sim.integrate(2.0)
+    assert sim.t == t_real
+    broken["on"] = False
+    sim.integrate(2.0)  # and goes on from there
+    assert sim.t == 2.0

@@ -1093,7 +1093,8 @@ PFVI_INTERNAL void pfvi_output_show_again(struct reb_simulation* r, struct pfvi_
 // From the run's state at r->t (the end of the last step, its forces in
 // st->end), the state at t_out by one trial step of t_out - r->t, shown
 // with r->t = t_out; the run's state kept. Returns the trial's verdict; on
-// anything but PFVI_TRIAL_OK the run's state is back in the simulation.
+// anything but PFVI_TRIAL_OK the run's state is back in the simulation and
+// the kept output (output_N, output_shown) as it was.
 // With `as_is`, the state is shown at t_out unchanged (PFVI_OUTPUT_NEAR).
 PFVI_INTERNAL enum pfvi_trial pfvi_output_present(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t_out,
         int as_is);

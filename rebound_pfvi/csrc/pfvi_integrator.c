@@ -807,7 +807,8 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
     const int finishing = (st->status_at_start == REB_STATUS_LAST_STEP);
     const int eligible = pfvi_output_eligible(r, st);
     const int shown = eligible && pfvi_output_is_shown(r, st);
-    const int at_end = shown || pfvi_state_is_end(r, st);
+    // (Compared only where an output may be shown from the last step's end.)
+    const int at_end = shown || (eligible && finishing && pfvi_state_is_end(r, st));
     // The time REBOUND may see next (the proposal, as after a step; a value
     // of its own would cap the next step).
     const double proposed = (st->dt_proposed != 0.) ? st->dt_proposed : dt_entry;
@@ -861,6 +862,13 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
                 return;
             }
             if (trial == PFVI_TRIAL_ERROR){
+                // Refused: the simulation as the call found it.
+                if (shown){
+                    pfvi_output_show_again(r, st);
+                    r->dt = dt_entry;
+                }else{
+                    st->output_N = 0;
+                }
                 pfvi_report(r, st);
                 return;
             }
@@ -910,6 +918,7 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
     }
     st->output_last_t0 = t0;
     st->output_last_t1 = r->t;
+    st->output_N = 0;  // the simulation holds the run's state
     if (dense && finishing && (r->t - t_target)*h > 0.){
         // The step passed the requested time: show the state there.
         const double t_end = r->t;
@@ -918,6 +927,9 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
         const enum pfvi_trial trial = pfvi_output_present(r, st, N, t_target,
                 fabs(t_target - t_end) <= PFVI_OUTPUT_NEAR*span);
         r->dt = proposed;
+        if (trial != PFVI_TRIAL_OK){
+            st->output_N = 0;  // the run's state, at the step's end, is the simulation's
+        }
         if (trial == PFVI_TRIAL_ERROR){
             pfvi_report(r, st);
         }else if (trial != PFVI_TRIAL_OK){

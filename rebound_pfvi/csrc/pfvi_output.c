@@ -202,8 +202,7 @@ enum pfvi_trial pfvi_output_present(struct reb_simulation* r, struct pfvi_state*
     st->statistics.n_attempts = attempts;  // an output is not a step of the run
     st->retry_valid = 0;  // its stages seed no step of the run
     if (trial != PFVI_TRIAL_OK){
-        st->output_N = 0;
-        return trial;
+        return trial;  // the run's state is in the simulation (the caller says what is shown)
     }
     output_keep(r->particles, st->output_shown, N);
     output_keep(r->particles_var, st->output_var_shown, n);
