@@ -10,6 +10,7 @@ retaken steps and output steps.
 
     python -P benchmarks/outputs.py                   # every scene (about 1 min on 2 cores)
     python -P benchmarks/outputs.py --scenes kepler,comet --cadences 10,100
+    python -P benchmarks/outputs.py --accuracy      # the outputs' own error (about 1 min)
 """
 import argparse
 import math
@@ -72,11 +73,44 @@ def run(scene, times):
     return sim, time.perf_counter() - start
 
 
+def accuracy(scene, per_period=10):
+    """The outputs' own error: the largest distance of a body from IAS15's
+    (epsilon 1e-11) at the output times, over the largest at the run's own
+    step ends (the same run sampled with exact_finish_time = 0)."""
+    times = times_of(scene, str(per_period))
+
+    def largest(exact):
+        sim = scene.build()
+        sim.integrator = "pfvi"
+        ref = scene.build()
+        ref.integrator = "ias15"
+        ref.integrator.epsilon = 1e-11
+        worst = 0.0
+        for t in times:
+            sim.integrate(t, exact_finish_time=exact)
+            ref.integrate(sim.t, exact_finish_time=1)
+            worst = max(worst, max(math.dist((p.x, p.y, p.z), (q.x, q.y, q.z))
+                                   for p, q in zip(sim.particles, ref.particles)))
+        return worst
+
+    shown, own = largest(1), largest(0)
+    return shown, own
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--scenes", default=",".join(SCENES))
     parser.add_argument("--cadences", default="10,100,1000,random", help="outputs per period, or 'random'")
+    parser.add_argument("--accuracy", action="store_true",
+                        help="instead: each output's error against IAS15 over the run's own at its step ends")
     args = parser.parse_args()
+    if args.accuracy:
+        print("| scene | outputs (10/period): largest error | the run's step ends: largest error | ratio |")
+        print("|---|---|---|---|")
+        for name in args.scenes.split(","):
+            shown, own = accuracy(make(name))
+            print(f"| {name} | {shown:.2g} AU | {own:.2g} AU | {shown/own:.2f} |", flush=True)
+        return
     cadences = args.cadences.split(",")
     print("| scene | one call: error, steps | " + " | ".join(f"{c}{'/period' if c != 'random' else ''}: "
                                                            "error ratio, steps, retaken, outputs, wall"
