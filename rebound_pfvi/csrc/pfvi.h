@@ -217,6 +217,18 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // e = 0.5 ... 0.99, epsilon 1e-6 and 1e-12): the correction does not fire.
 #define PFVI_TRACK_MISMATCH_WEIGHT (1./32.)
 #define PFVI_TRACK_MISMATCH_MAX 0.1
+// Outputs (pfvi_output.c): a requested time within OUTPUT_NEAR of the run's
+// state, relative to the time the run has spanned (REBOUND's own tolerance
+// for finishing on time, 1e-12 of t), is that state's: shown as it is,
+// with no new step and no output step. A reversal comes back to its start
+// with t off by the steps' rounding (1.4e-11 after 2600 steps at e = 0.95,
+// the state within 1e-13 of the start): a new step there and an output
+// step back left integrate(400) and back 8.5e-11 AU off instead.
+#define PFVI_OUTPUT_NEAR 1e-12
+// Variational particles found scaled by one factor since an output (REBOUND
+// rescales them past 1e100) within this relative slack are taken as
+// rescaled, not edited: the run's are scaled alike.
+#define PFVI_OUTPUT_RESCALE_SLACK 1e-14
 // lambda (density_scale) at most: steps 1e12 times shorter than the density
 // asks are no time scale a REBOUND run resolves; a stored value above it is
 // discarded, and the retakes never raise lambda past it.
@@ -461,6 +473,14 @@ struct pfvi_end_state {
     double a[3];
 };
 
+// A particle's position, velocity and mass, as an output keeps them
+// (pfvi_output.c; saved in archives).
+struct pfvi_output_particle {
+    double xv[6];
+    double m;
+    double a[3];  // the run's state: the acceleration the next step starts from
+};
+
 /* ------------------------------------------- geometry (time scales) */
 
 // What the time scales see of REBOUND's gravity: G (0 without gravity), the
@@ -576,6 +596,7 @@ struct pfvi_statistics {
     uint64_t n_variational_unconverged; // steps whose tangent solve stopped short of round-off
     uint64_t n_solve_recovered;    // steps whose stage solve refreshed or dropped its Newton Jacobians
     uint64_t n_solve_halved;       // trial steps halved because their stage solve failed
+    uint64_t n_outputs;            // output steps (pfvi_output.c): states shown at a requested time
 };
 
 // What a trial step found, committed only if the step is taken.
@@ -696,6 +717,8 @@ struct pfvi_state {
     double density_scale;
     double dt_last_full;
     double track_mismatch;  // the average mismatch of rho and lambda sigma (PFVI_TRACK_MISMATCH_WEIGHT)
+    double track_seen_lo;   // the time the average has seen: intervals a reversal retraces
+    double track_seen_hi;   // within it are not averaged again (pfvi_control.c)
     // What the symmetric track's time lost to rounding: the state is at
     // r->t + t_compensation (0 if r->t is not t_compensated, the t it was
     // kept for), so that a step capped to finish on time lands there.
@@ -842,6 +865,29 @@ struct pfvi_state {
     struct reb_vec3d* var_dv;      // the two-point step's velocity increment before the final kick
     size_t var_predictor_N;        // >0: var_predictor_* are the stages of the step predictor_* describe (saved)
     int var_retry_valid;           // var_stage_* hold the last trial's (a retry of the same step)
+    // Outputs (pfvi_output.c). REBOUND finishing on a requested time (its
+    // exact_finish_time) asks for a step cut short; the symmetric control
+    // takes its whole interval instead and the simulation shows the state
+    // at the requested time from an output step (a trial from the step's
+    // end, never committed). The run's own state is kept here and taken up
+    // again by the next step if nothing was edited. All but output_uncapped
+    // and output_failed_t are saved in archives.
+    struct pfvi_output_particle* output_real;   // the run's state at output_t_real
+    struct pfvi_output_particle* output_shown;  // what the simulation was given at output_t
+    size_t output_N;               // >0: an output is shown (the number of particles)
+    struct pfvi_output_particle* output_var_real;   // the variational particles likewise
+    struct pfvi_output_particle* output_var_shown;
+    size_t output_var_N;
+    double output_megno[2][2];     // REBOUND's megno_Ys and megno_Yss: the run's [0] and shown [1]
+    double output_t;
+    double output_t_real;
+    int output_stages;             // the options the shown output was made with
+    double output_epsilon;
+    double output_last_t0;         // the last real step went from output_last_t0 to output_last_t1
+    double output_last_t1;
+    int output_uncapped;           // set by the glue: the symmetric control takes the whole interval
+    int output_taken_up;           // set by the glue: the step starts from the run's state, its force kept
+    double output_failed_t;        // an output step from the state at this t did not converge
     // MEGNO's stage velocities: w_k = w_0 + h sum_j collocation[k][j] a_j,
     // collocation[k][j] the integral of l_j from 0 to c^k (Lobatto IIIA), for s = collocation_s.
     double collocation[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
@@ -867,6 +913,8 @@ PFVI_INTERNAL int pfvi_end_is_start(const struct reb_simulation* r, const struct
 PFVI_INTERNAL int pfvi_state_is_end(const struct reb_simulation* r, const struct pfvi_state* st);
 // Keeps the end of the step just taken as the next step's start (force reuse).
 PFVI_INTERNAL void pfvi_keep_end(const struct reb_simulation* r, struct pfvi_state* st, size_t N);
+// Marks st->end (set by the caller) as the particles at r->t under the current force model.
+PFVI_INTERNAL void pfvi_keep_end_model(const struct reb_simulation* r, struct pfvi_state* st, size_t N);
 // Drops what particles edited since the last step carried (compensation, predictor).
 PFVI_INTERNAL void pfvi_forget_edited(const struct reb_simulation* r, struct pfvi_state* st);
 // The field the time scales see (struct pfvi_field): REBOUND's G (0 with
@@ -1048,6 +1096,31 @@ PFVI_INTERNAL int pfvi_var_start_finite(const struct reb_simulation* r, struct p
 PFVI_INTERNAL int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
         struct pfvi_fixed_check* out);
 
+
+/* ---------------------------------------------------------------- outputs */
+
+// pfvi_output.c: outputs that leave the run's steps as they are.
+// Whether this step may take its whole interval and show an output instead
+// of a step cut short (symmetric control, epsilon > 0, fitting 'none').
+PFVI_INTERNAL int pfvi_output_eligible(const struct reb_simulation* r, const struct pfvi_state* st);
+// Whether the simulation still shows the kept output, unedited: N, N_var, t,
+// every position, velocity and mass (variational ones too), stages, epsilon
+// and the force model as they were.
+PFVI_INTERNAL int pfvi_output_is_shown(const struct reb_simulation* r, const struct pfvi_state* st);
+// Puts the run's own state (output_real, output_t_real) into the simulation.
+PFVI_INTERNAL void pfvi_output_take_up(struct reb_simulation* r, struct pfvi_state* st);
+// Puts the shown output back (a step refused after pfvi_output_take_up).
+PFVI_INTERNAL void pfvi_output_show_again(struct reb_simulation* r, struct pfvi_state* st);
+// From the run's state at r->t (the end of the last step, its forces in
+// st->end), the state at t_out by one trial step of t_out - r->t, shown
+// with r->t = t_out; the run's state kept. Returns the trial's verdict; on
+// anything but PFVI_TRIAL_OK the run's state is back in the simulation and
+// the kept output (output_N, output_shown) as it was.
+// With `as_is`, the state is shown at t_out unchanged (PFVI_OUTPUT_NEAR).
+PFVI_INTERNAL enum pfvi_trial pfvi_output_present(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t_out,
+        int as_is);
+// Whether the force model is the one the last step ended with (1 if no step is kept).
+PFVI_INTERNAL int pfvi_force_model_kept(const struct reb_simulation* r, const struct pfvi_state* st);
 
 /* ---------------------------------------------------------- step control */
 

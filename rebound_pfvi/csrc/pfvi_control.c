@@ -361,6 +361,29 @@ static struct track_position symmetric_position(const struct pfvi_state* st, dou
     return t;
 }
 
+// Whether the full interval of the track just ended at r->t (of length
+// `length`, crossed in direction `sign`) lies outside the time the track's
+// mismatch average has seen (track_seen_lo ... track_seen_hi, extended if
+// so). Only such intervals enter the average: a reversal retraces the
+// intervals the way out averaged, and the average kept as it was there
+// makes the drift correction fire where it fired, never anew (averaged
+// again on the way back, an average of -0.094 at the turn reached -0.1:
+// e = 0.68 from apocentre came back with one asymmetric step, t 15 off the
+// start; undone exactly, A = (A' - w m)/(1 - w) grows the doubles' error
+// by 1/(1 - w) per interval).
+static int symmetric_interval_unseen(struct pfvi_state* st, double t_end, double length, double sign){
+    const double middle = t_end - 0.5*sign*length;
+    if (sign > 0. && middle > st->track_seen_hi){
+        st->track_seen_hi = t_end;
+        return 1;
+    }
+    if (sign < 0. && middle < st->track_seen_lo){
+        st->track_seen_lo = t_end;
+        return 1;
+    }
+    return 0;
+}
+
 // The symmetric step (Hairer & Soderlind 2005, SIAM J. Sci. Comput. 26,
 // 1838): the grid of the run has intervals h_n = kappa/rho_n+1/2 with
 //     rho_n+1/2 = rho_n-1/2 + kappa G(y_n),   G = d log(sigma)/dt,
@@ -435,11 +458,15 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     symmetric_discard_implausible(st, sigma0);
     if (!symmetric_on_track(st, kappa)){
         st->track_mismatch = 0.;  // a fresh track starts its average afresh
+        st->track_seen_lo = st->track_seen_hi = t0;
     }
     struct track_position t = symmetric_position(st, sign, kappa, sigma0, g0);
-    const double dt = fabs(r->dt);
+    // An output time does not cap the step (pfvi_output.c shows it): the
+    // step is the one sim.dt as the last step proposed it would give.
+    const int output = st->output_uncapped;
+    const double dt = (output && st->dt_proposed != 0.) ? fabs(st->dt_proposed) : fabs(r->dt);
     const int uncapped = (symmetric_on_track(st, kappa) && (dt == fabs(st->dt_proposed) || dt == fabs(st->dt_last_full)))
-        || (st->dt_proposed == 0. && dt == PFVI_REBOUND_DT_DEFAULT);
+        || (st->dt_proposed == 0. && (dt == PFVI_REBOUND_DT_DEFAULT || output));
     const double cap = uncapped ? INFINITY : dt;
     double h = fmin(t.remaining, cap);
     // The state is at t0 + t_lo: a step capped to reach t0 + sign cap goes
@@ -547,6 +574,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     if (restart){
         st->rho = 0.;
         st->track_mismatch = 0.;
+        st->track_seen_lo = st->track_seen_hi = r->t;
     }else{
         st->rho = t.rho;
         st->rho_sign = sign;
@@ -564,7 +592,8 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
             st->track_done = kappa/st->rho;
             asymmetric = 1;
         }
-        if (full && t.done == 0. && !shortened && sigma0 > 0. && sigma1 > 0.){
+        const int unseen = full && symmetric_interval_unseen(st, r->t, t.length, sign);
+        if (unseen && t.done == 0. && !shortened && sigma0 > 0. && sigma1 > 0.){
             // The interval's mismatch, averaged; a drift of the average is
             // taken out of rho (pfvi.h, PFVI_TRACK_MISMATCH_MAX).
             const double m = log(t.rho/(lambda*sqrt(sigma0)*sqrt(sigma1)));

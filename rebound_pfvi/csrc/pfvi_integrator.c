@@ -203,8 +203,24 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "to more tightly: a circumbinary planet orbits the binary), and per unbound pair (or ghost image) "
       "its crossing rate v/r, softened; rho_n+1/2 = rho_n-1/2 + kappa d log(sigma)/dt (Hairer & "
       "Soderlind 2005, SIAM J. Sci. Comput. 26, 1838) reads the same forward and backward: one stage "
-      "solve per step, and a round trip retraces the steps. sim.dt is the step proposed after each "
-      "step; a different value (REBOUND finishing on time, a sampling time, the user) caps the step "
+      "solve per step, and a round trip retraces the steps: sim.steps(n), sim.dt = -sim.dt, "
+      "sim.steps(n) comes back to the start, and so does integrate(T) then integrate(0) (the track's "
+      "drift average counts each interval once, so a reversal does not fire it anew; a requested time "
+      "within " PFVI_STR(PFVI_OUTPUT_NEAR) " of the run's span from the state reached is taken as "
+      "reached). Outputs do not change the run: where REBOUND finishes on a requested time "
+      "(integrate(t) with exact_finish_time = 1, its default) the step takes its whole interval and "
+      "the simulation is given the state at t from an output step, one trial step from the step's "
+      "end back to t, never committed (n_outputs); the run's own state is kept (saved in archives) "
+      "and the next step goes on from it if the simulation was not edited (particles, t, N, stages, "
+      "epsilon or the force model; variational particles rescaled by REBOUND count as unedited), so "
+      "a run's steps and states do not depend on its output times, and an output's error is the "
+      "run's plus that of one step shorter than its own. An edit makes the shown state the user's, "
+      "as after any edit. Changes pfvi cannot see (a callback's own variables, REBOUNDx parameters) "
+      "made between outputs act from the run's next step, which may start past the output. MEGNO's "
+      "Y is the output's; <Y> and the Lyapunov exponent are sampled at the run's steps. "
+      "exact_finish_time = 0, fixed steps (epsilon = 0) and fittings other than 'none' are as "
+      "before: sim.dt is the step proposed after each step; a different value (REBOUND finishing on "
+      "time where outputs are not shown, the user) caps the step "
       "and the next steps cross the rest of the interval, so the track goes on and a reversal "
       "retraces the capped step first. REBOUND's sim.dt of a new simulation (0.001) does not cap the "
       "first step; any other value set before it does. Checks at each step's end, each retaking the "
@@ -246,11 +262,31 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "track_done", offsetof(struct pfvi_state, track_done), 0, 0, 0 },
     { "", REB_INT, "track_at_end", offsetof(struct pfvi_state, track_at_end), 0, 0, 0 },
     { "", REB_DOUBLE, "track_mismatch", offsetof(struct pfvi_state, track_mismatch), 0, 0, 0 },
+    { "", REB_DOUBLE, "track_seen_lo", offsetof(struct pfvi_state, track_seen_lo), 0, 0, 0 },
+    { "", REB_DOUBLE, "track_seen_hi", offsetof(struct pfvi_state, track_seen_hi), 0, 0, 0 },
     { "", REB_DOUBLE, "track_kappa", offsetof(struct pfvi_state, track_kappa), 0, 0, 0 },
     { "", REB_DOUBLE, "density_scale", offsetof(struct pfvi_state, density_scale), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_last_full", offsetof(struct pfvi_state, dt_last_full), 0, 0, 0 },
     { "", REB_DOUBLE, "t_compensation", offsetof(struct pfvi_state, t_compensation), 0, 0, 0 },
     { "", REB_DOUBLE, "t_compensated", offsetof(struct pfvi_state, t_compensated), 0, 0, 0 },
+    { "", REB_POINTER, "output_real", offsetof(struct pfvi_state, output_real),
+        offsetof(struct pfvi_state, output_N), sizeof(struct pfvi_output_particle), 0 },
+    { "", REB_POINTER, "output_shown", offsetof(struct pfvi_state, output_shown),
+        offsetof(struct pfvi_state, output_N), sizeof(struct pfvi_output_particle), 0 },
+    { "", REB_POINTER, "output_var_real", offsetof(struct pfvi_state, output_var_real),
+        offsetof(struct pfvi_state, output_var_N), sizeof(struct pfvi_output_particle), 0 },
+    { "", REB_POINTER, "output_var_shown", offsetof(struct pfvi_state, output_var_shown),
+        offsetof(struct pfvi_state, output_var_N), sizeof(struct pfvi_output_particle), 0 },
+    { "", REB_DOUBLE, "output_megno_Ys", offsetof(struct pfvi_state, output_megno[0][0]), 0, 0, 0 },
+    { "", REB_DOUBLE, "output_megno_Yss", offsetof(struct pfvi_state, output_megno[0][1]), 0, 0, 0 },
+    { "", REB_DOUBLE, "output_megno_Ys_shown", offsetof(struct pfvi_state, output_megno[1][0]), 0, 0, 0 },
+    { "", REB_DOUBLE, "output_megno_Yss_shown", offsetof(struct pfvi_state, output_megno[1][1]), 0, 0, 0 },
+    { "", REB_DOUBLE, "output_t", offsetof(struct pfvi_state, output_t), 0, 0, 0 },
+    { "", REB_DOUBLE, "output_t_real", offsetof(struct pfvi_state, output_t_real), 0, 0, 0 },
+    { "", REB_INT, "output_stages", offsetof(struct pfvi_state, output_stages), 0, 0, 0 },
+    { "", REB_DOUBLE, "output_epsilon", offsetof(struct pfvi_state, output_epsilon), 0, 0, 0 },
+    { "", REB_DOUBLE, "output_last_t0", offsetof(struct pfvi_state, output_last_t0), 0, 0, 0 },
+    { "", REB_DOUBLE, "output_last_t1", offsetof(struct pfvi_state, output_last_t1), 0, 0, 0 },
     { "", REB_INT, "predictor_stages", offsetof(struct pfvi_state, predictor_stages), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_h", offsetof(struct pfvi_state, predictor_h), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_t", offsetof(struct pfvi_state, predictor_t), 0, 0, 0 },
@@ -307,6 +343,11 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     PFVI_STATISTIC("trial steps halved because their stage solve did not converge (included in "
         "n_rejected; with the symmetric control such a step is not time-symmetric).",
         REB_UINT64, n_solve_halved),
+    PFVI_STATISTIC("output steps: states shown at a time REBOUND asked to finish on (integrate(t) with "
+        "exact_finish_time = 1) that the step passed, each a trial step from the step's end back to "
+        "that time, never committed (see step_control). Not counted in n_steps or n_attempts; their "
+        "force evaluations are in n_force_evaluations.",
+        REB_UINT64, n_outputs),
     PFVI_STATISTIC("smallest omega used in the last step (after limiting).",
         REB_DOUBLE, omega_min),
     PFVI_STATISTIC("largest omega used in the last step (after limiting).",
@@ -586,7 +627,7 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
     // synchronizes at the end of the last), a heartbeat (it may change
     // anything), velocity-dependent forces, or any bit of N, t, the force
     // model (struct pfvi_force_model), a position, velocity or mass.
-    const int reuse = r->dt_last_done != 0. && !r->force_is_velocity_dependent && !r->heartbeat
+    const int reuse = (r->dt_last_done != 0. || st->output_taken_up) && !r->force_is_velocity_dependent && !r->heartbeat
         && pfvi_end_is_start(r, st);
     if (!reuse){
         // Checked before anything is changed, so that a refusal leaves the
@@ -719,9 +760,9 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
         return;
     }
     st->options = st->settings;  // what this step runs with, whatever a callback sets during it
-    const double t0 = r->t;
     const size_t N = r->N;
     if (N == 0){
+        const double t0 = r->t;
         if (t0 + r->dt == t0){
             pfvi_error(r, "pfvi: the step dt = %.3g does not change t = %.17g (it is below the rounding of t); "
                     "step not taken.", r->dt, t0);
@@ -751,19 +792,104 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
             return;
         }
     }
-    if (st->var_N && !pfvi_var_start_finite(r, st, t0)){
+    if (st->var_N && !pfvi_var_start_finite(r, st, r->t)){
         // Checked before anything is changed: t and every particle, real
         // and variational, are as they were.
         pfvi_report(r, st);
         return;
     }
     r->gravity_ignore_terms = REB_GRAVITY_IGNORE_TERMS_NONE;
-    if (!pfvi_step_start(r, st, N, t0)){
+    // Outputs (pfvi_output.c): REBOUND finishing on a requested time
+    // (status LAST_STEP, sim.dt cut to reach it) gets the state there from
+    // an output step, and the run's own steps go on unbroken; a shown output
+    // left unedited is taken up again before anything else.
+    const double t_entry = r->t, dt_entry = r->dt;
+    const double t_target = t_entry + dt_entry;
+    const int finishing = (st->status_at_start == REB_STATUS_LAST_STEP);
+    const int eligible = pfvi_output_eligible(r, st);
+    const int shown = eligible && pfvi_output_is_shown(r, st);
+    // (Compared only where an output may be shown from the last step's end.)
+    const int at_end = shown || (eligible && finishing && pfvi_state_is_end(r, st));
+    // The time REBOUND may see next (the proposal, as after a step; a value
+    // of its own would cap the next step).
+    const double proposed = (st->dt_proposed != 0.) ? st->dt_proposed : dt_entry;
+    if (shown){
+        pfvi_output_take_up(r, st);
+        r->dt = finishing ? t_target - r->t : dt_entry;
+        if (!finishing && (r->t - t_entry)*dt_entry >= 0.){
+            // A step on from the output: the run's state lies that way, and
+            // going there is the step (REBOUND does not know where the next
+            // output is: a time it passed is shown from there).
+            r->dt = proposed;
+            r->dt_last_done = proposed;
+            st->output_N = 0;
+            return;
+        }
+    }else{
+        st->output_N = 0;  // what the simulation holds is the run's state, or the user's
+    }
+    const double t0 = r->t;
+    const size_t density_N = st->density_N;
+    const double density_sigma = st->density_sigma, density_dlog = st->density_dlog;
+    const int started = pfvi_step_start(r, st, N, t0);
+    st->output_taken_up = 0;
+    if (!started){
+        if (shown){
+            pfvi_output_show_again(r, st);
+            r->dt = dt_entry;
+        }
         return;
     }
+    int dense = eligible && (finishing || shown) && st->options.epsilon > 0. && st->density_sigma > 0.;
+    if (dense && finishing){
+        // The last step went from output_last_t0 to t0 (its end unedited):
+        // a time inside it is shown from here, with no step of the run.
+        const double d = t0 - st->output_last_t0;
+        const double span = fmax(fmax(fabs(t0), fabs(d)), st->track_seen_hi - st->track_seen_lo);
+        const int near = at_end && fabs(t_target - t0) <= PFVI_OUTPUT_NEAR*span;
+        const int inside = near || (at_end && t0 == st->output_last_t1 && (t0 - t_target)*d > 0.
+            && (t_target - st->output_last_t0)*d > 0.);
+        if (t_target == t0 || (inside && st->output_failed_t != t0)){
+            const enum pfvi_trial trial = (t_target == t0) ? PFVI_TRIAL_OK : pfvi_output_present(r, st, N, t_target, near);
+            if (trial == PFVI_TRIAL_OK){
+                // The density found at this state's end still holds for the next step.
+                if (density_N == N){
+                    st->density_N = density_N;
+                    st->density_sigma = density_sigma;
+                    st->density_dlog = density_dlog;
+                }
+                r->dt = proposed;
+                r->dt_last_done = proposed;
+                return;
+            }
+            if (trial == PFVI_TRIAL_ERROR){
+                // Refused: the simulation as the call found it.
+                if (shown){
+                    pfvi_output_show_again(r, st);
+                    r->dt = dt_entry;
+                }else{
+                    st->output_N = 0;
+                }
+                pfvi_report(r, st);
+                return;
+            }
+            // Not converged: the time is reached by a step of the run cut
+            // short, as before outputs were shown (output_failed_t).
+            st->output_failed_t = t0;
+            dense = 0;
+        }else if (inside){
+            dense = 0;
+        }
+    }
+    st->output_uncapped = dense;
     const double h = (st->options.epsilon == 0.) ? pfvi_fixed_step(r, st, N, t0) : pfvi_controlled_step(r, st, N, t0);
+    st->output_uncapped = 0;
     if (h == 0.){
         pfvi_report(r, st);
+        if (shown && r->t == t0){
+            pfvi_output_show_again(r, st);
+            r->dt = dt_entry;
+        }
         return;
     }
     if (r->t == t0){
@@ -789,6 +915,26 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
             const double Y_end = (r->megno_Ys + st->trial.megno_dY)/(r->t - r->megno_initial_t);
             r->megno_Yss += st->trial.megno_Y_integral - Y_end*h;
             reb_tools_megno_update(r, st->trial.megno_dY, h);
+        }
+    }
+    st->output_last_t0 = t0;
+    st->output_last_t1 = r->t;
+    st->output_N = 0;  // the simulation holds the run's state
+    if (dense && finishing && (r->t - t_target)*h > 0.){
+        // The step passed the requested time: show the state there.
+        const double t_end = r->t;
+        const double proposed = r->dt;
+        const double span = fmax(fmax(fabs(t_end), fabs(h)), st->track_seen_hi - st->track_seen_lo);
+        const enum pfvi_trial trial = pfvi_output_present(r, st, N, t_target,
+                fabs(t_target - t_end) <= PFVI_OUTPUT_NEAR*span);
+        r->dt = proposed;
+        if (trial != PFVI_TRIAL_OK){
+            st->output_N = 0;  // the run's state, at the step's end, is the simulation's
+        }
+        if (trial == PFVI_TRIAL_ERROR){
+            pfvi_report(r, st);
+        }else if (trial != PFVI_TRIAL_OK){
+            st->output_failed_t = t_end;  // REBOUND comes back for the time: a step cut short
         }
     }
 }

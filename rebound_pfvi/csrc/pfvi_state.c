@@ -59,6 +59,10 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->var_unknowns_next);
     free(st->var_stage_start);
     free(st->var_dv);
+    free(st->output_real);
+    free(st->output_shown);
+    free(st->output_var_real);
+    free(st->output_var_shown);
     free(st);
 }
 
@@ -89,6 +93,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
         st->density_scale = 1.;
         st->density_N = 0;
         st->end_N = 0;
+        st->output_N = 0;  // a shown output described the old particles
     }
     if (N <= st->N_allocated){
         return 1;
@@ -124,6 +129,11 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->newton_index = pfvi_grow(st->newton_index, N*sizeof(*st->newton_index), &ok);
     st->newton_mark = pfvi_grow(st->newton_mark, N*sizeof(*st->newton_mark), &ok);
     st->solve_scale = pfvi_grow(st->solve_scale, N*sizeof(*st->solve_scale), &ok);
+    st->output_real = pfvi_grow(st->output_real, N*sizeof(*st->output_real), &ok);
+    st->output_shown = pfvi_grow(st->output_shown, N*sizeof(*st->output_shown), &ok);
+    if (st->output_N > N){
+        st->output_N = 0;  // as the predictor's, after an archive with fewer particles
+    }
     if (st->predictor_N > N){
         // Only after a Simulationarchive load with fewer particles: the buffer
         // now holds N; an archive must never write more than it holds.
@@ -155,6 +165,12 @@ int pfvi_var_scratch(struct pfvi_state* st, size_t n){
     st->var_unknowns_next = pfvi_grow(st->var_unknowns_next, n*sizeof(*st->var_unknowns_next), &ok);
     st->var_stage_start = pfvi_grow(st->var_stage_start, n*sizeof(*st->var_stage_start), &ok);
     st->var_dv = pfvi_grow(st->var_dv, n*sizeof(*st->var_dv), &ok);
+    st->output_var_real = pfvi_grow(st->output_var_real, n*sizeof(*st->output_var_real), &ok);
+    st->output_var_shown = pfvi_grow(st->output_var_shown, n*sizeof(*st->output_var_shown), &ok);
+    if (st->output_var_N > n){
+        st->output_var_N = 0;
+        st->output_N = 0;
+    }
     if (st->var_predictor_N > n){
         st->var_predictor_N = 0;  // (an archive's, larger than what it now describes)
     }
@@ -299,6 +315,10 @@ void pfvi_step_model_apply_pending(struct reb_simulation* r, struct pfvi_state* 
     }
 }
 
+int pfvi_force_model_kept(const struct reb_simulation* r, const struct pfvi_state* st){
+    return st->end_N != r->N || force_model_unchanged(r, &st->cache_model);
+}
+
 int pfvi_end_is_start(const struct reb_simulation* r, const struct pfvi_state* st){
     return st->cache_N == r->N && pfvi_state_is_end(r, st);
 }
@@ -325,6 +345,13 @@ void pfvi_keep_end(const struct reb_simulation* r, struct pfvi_state* st, size_t
         e[i].m = ps[i].m;
         e[i].a[0] = ps[i].ax; e[i].a[1] = ps[i].ay; e[i].a[2] = ps[i].az;
     }
+    st->cache_N = N;
+    st->cache_t = r->t;
+    force_model_keep(r, &st->cache_model);
+    st->end_N = N;
+}
+
+void pfvi_keep_end_model(const struct reb_simulation* r, struct pfvi_state* st, size_t N){
     st->cache_N = N;
     st->cache_t = r->t;
     force_model_keep(r, &st->cache_model);
@@ -441,6 +468,9 @@ void pfvi_discard_implausible(const struct reb_simulation* r, struct pfvi_state*
     }
     if (!(fabs(st->track_mismatch) <= PFVI_TRACK_MISMATCH_MAX)){
         st->track_mismatch = 0.;
+    }
+    if (!(st->track_seen_lo <= st->track_seen_hi)){
+        st->track_seen_lo = st->track_seen_hi = r->t;  // NaN or crossed: everything ahead is unseen
     }
     if (!(fabs(st->t_compensation) <= 1e-9*fmax(1., fabs(r->t)))){
         st->t_compensation = 0.;

@@ -1,0 +1,247 @@
+"""Outputs that do not change the answer (issue 36, item 1).
+
+`for t in times: sim.integrate(t)` (exact_finish_time = 1) shows each time
+from an output step and takes the run's steps unbroken: the run is the same,
+bit for bit, whatever its output times. Full measurements on every page's
+scene: benchmarks/outputs.py (docs/step-control.md, "Outputs and reversal").
+"""
+import math
+import random
+
+import numpy as np
+import pytest
+import rebound
+
+import rebound_pfvi  # noqa: F401  (registers "pfvi")
+
+
+def kepler(e=0.6, f=0.0, **options):
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=e, f=f)
+    sim.move_to_com()
+    sim.integrator = "pfvi"
+    for name, value in options.items():
+        setattr(sim.integrator, name, value)
+    return sim
+
+
+def encke(**options):
+    """An Encke-like comet (a = 2.2 AU, e = 0.85) among Venus, Earth, Mars and
+    Jupiter, in AU, yr and Msun."""
+    sim = rebound.Simulation()
+    sim.units = ("AU", "yr", "Msun")
+    sim.add(m=1.0)
+    for m, a, e, M in ((2.45e-6, 0.723, 0.007, 1.0), (3.0e-6, 1.0, 0.017, 2.0), (3.2e-7, 1.524, 0.093, 3.0),
+                       (9.55e-4, 5.203, 0.048, 4.0)):
+        sim.add(m=m, a=a, e=e, M=M)
+    sim.add(m=0.0, a=2.2, e=0.85, inc=math.radians(12.0), omega=3.0, M=0.5)
+    sim.move_to_com()
+    sim.integrator = "pfvi"
+    for name, value in options.items():
+        setattr(sim.integrator, name, value)
+    return sim
+
+
+def cadence(T, period, per_orbit=None, rand=None, seed=1):
+    if per_orbit:
+        n = int(round(T/period*per_orbit))
+        return [T*(k + 1)/n for k in range(n - 1)] + [T]
+    if rand:
+        rng = random.Random(seed)
+        return sorted(rng.uniform(0.0, T) for _ in range(rand)) + [T]
+    return [T]
+
+
+def state(sim):
+    return np.array([[p.x, p.y, p.z, p.vx, p.vy, p.vz] for p in sim.particles])
+
+
+def run(build, times):
+    sim = build()
+    for t in times:
+        sim.integrate(t)
+        # REBOUND's own t + (t_out - t): exact from a step's start, within the
+        # rounding of the step's end when the time lies inside the last step.
+        assert sim.t == pytest.approx(t, rel=1e-14, abs=1e-300)
+    return sim
+
+
+@pytest.mark.parametrize("scene", ["kepler", "encke"])
+@pytest.mark.parametrize("outputs", [(10, None), (100, None), (1000, None), (None, 50)],
+                         ids=["10/orbit", "100/orbit", "1000/orbit", "random"])
+def test_outputs_leave_the_run_bit_identical(scene, outputs):
+    build, period, T = (kepler, 2*math.pi, 3*2*math.pi) if scene == "kepler" else (encke, 2.2**1.5, 2*2.2**1.5)
+    if scene == "encke" and outputs[0] == 1000:
+        T = 2.2**1.5  # one comet period: 3300 outputs
+    one = run(build, [T])
+    many = run(build, cadence(T, period, *outputs))
+    assert state(many).tobytes() == state(one).tobytes()
+    assert many.t == one.t
+    a, b = one.integrator, many.integrator
+    assert (b.n_steps, b.n_rejected, b.n_asymmetric, b.n_attempts) == (a.n_steps, a.n_rejected, a.n_asymmetric, a.n_attempts)
+    assert b.n_outputs >= len(cadence(T, period, *outputs)) - 1
+    assert b.n_rejected == 0
+
+
+def test_an_output_is_as_accurate_as_the_run():
+    # The output step's error against the run's own: each output of a
+    # 100-per-orbit cadence against IAS15 at 1e-12, and the run's own states
+    # at its step ends (exact_finish_time = 0) against the same.
+    T, times = 3*2*math.pi, cadence(3*2*math.pi, 2*math.pi, 100)
+
+    def errors(sim, exact):
+        ref = kepler()
+        ref.integrator = "ias15"
+        ref.integrator.epsilon = 1e-12
+        out = []
+        for t in times:
+            sim.integrate(t, exact_finish_time=exact)
+            ref.integrate(sim.t, exact_finish_time=1)
+            out.append(np.abs(state(sim)[:, :3] - state(ref)[:, :3]).max())
+        return np.array(out)
+
+    shown = errors(kepler(), 1)
+    own = errors(kepler(), 0)
+    # Measured: 1.03 times the steps' largest error (1.1e-7 AU after 3 orbits; e = 0.9: 1.17).
+    assert shown.max() <= 3*own.max()
+    assert own.max() < 1e-6
+
+
+def test_archive_written_at_an_output_restarts_bit_identically(tmp_path):
+    path = str(tmp_path / "outputs.bin")
+    sim = encke()
+    times = cadence(2*2.2**1.5, 2.2**1.5, 10)
+    for t in times[:7]:
+        sim.integrate(t)
+    sim.save_to_file(path)
+    loaded = rebound.Simulation(path)
+    assert loaded.integrator.n_outputs == sim.integrator.n_outputs
+    for s in (sim, loaded):
+        for t in times[7:]:
+            s.integrate(t)
+    assert state(loaded).tobytes() == state(sim).tobytes()
+    assert loaded.integrator.n_steps == sim.integrator.n_steps
+
+
+def test_an_edit_at_an_output_starts_from_the_users_state():
+    def edited(edit):
+        sim = kepler()
+        sim.integrate(1.0)
+        assert sim.integrator.output_t_real > 1.0  # the run's state lies past the output
+        if edit:
+            sim.particles[1].vx += 1e-6
+        sim.integrate(1.5)
+        return sim
+    sim, unedited = edited(True), edited(False)
+    # A fresh simulation from the edited state at t = 1.
+    fresh = kepler()
+    fresh.integrate(1.0)
+    fresh.particles[1].vx += 1e-6
+    start = state(fresh)
+    again = rebound.Simulation()
+    again.add(m=1.0)
+    again.add(m=1e-3)
+    for p, row in zip(again.particles, start):
+        p.x, p.y, p.z, p.vx, p.vy, p.vz = row
+    again.t = 1.0
+    again.integrator = "pfvi"
+    again.integrate(1.5)
+    # Measured: 1.4e-9 from the fresh run (its first step differs), 4.6e-7
+    # from the run that ignored the edit.
+    assert np.abs(state(again) - state(sim)).max() < 1e-8
+    assert np.abs(state(unedited) - state(sim)).max() > 1e-7
+
+
+def test_an_option_changed_at_an_output_starts_from_the_shown_state():
+    sim = kepler()
+    sim.integrate(1.0)
+    sim.integrator.epsilon = 1e-8
+    sim.integrate(1.3)
+    assert sim.integrator.output_last_t0 == 1.0  # the first step started at the shown time
+
+
+def test_exact_finish_time_0_shows_no_output():
+    sim = kepler()
+    for t in (1.0, 2.0, 3.0):
+        sim.integrate(t, exact_finish_time=0)
+        assert sim.t >= t
+    assert sim.integrator.n_outputs == 0
+
+
+def test_backward_outputs_leave_the_run_bit_identical():
+    one = run(kepler, [-10.0])
+    many = run(kepler, [-k*0.1 for k in range(1, 101)])
+    assert state(many).tobytes() == state(one).tobytes()
+    assert many.integrator.n_steps == one.integrator.n_steps
+
+
+def test_heartbeat_sees_the_requested_times():
+    sim = kepler()
+    seen = []
+    sim.heartbeat = lambda s: seen.append(sim.t)
+    times = [0.37*k for k in range(1, 20)]
+    for t in times:
+        sim.integrate(t)
+    assert set(times) <= set(seen)
+    # Steps and outputs alike go forward: no heartbeat ever sees t run back.
+    assert all(b >= a for a, b in zip(seen, seen[1:]))
+
+
+def test_variational_particles_and_megno_with_outputs():
+    def build():
+        sim = rebound.Simulation()
+        sim.add(m=1)
+        sim.add(m=1e-3, a=1.0, e=0.4)
+        sim.add(m=1e-3, a=2.3, e=0.2, inc=0.1)
+        sim.move_to_com()
+        sim.integrator = "pfvi"
+        sim.init_megno(seed=1)
+        return sim
+    one = run(build, [20.0])
+    many = run(build, [0.25*k for k in range(1, 81)])
+    plain = run(lambda: kepler_planets(), [20.0])
+    assert state(many).tobytes() == state(one).tobytes()
+    assert state(plain).tobytes() == state(one).tobytes()  # the real run, with or without them
+    # Y at the output, from the output step's share: as the single call's.
+    assert many._megno_Ys == pytest.approx(one._megno_Ys, rel=1e-12)
+    assert np.abs(np.array([[p.x, p.vx] for p in many.particles_var])
+                  - np.array([[p.x, p.vx] for p in one.particles_var])).max() == 0.0
+
+
+def kepler_planets():
+    sim = rebound.Simulation()
+    sim.add(m=1)
+    sim.add(m=1e-3, a=1.0, e=0.4)
+    sim.add(m=1e-3, a=2.3, e=0.2, inc=0.1)
+    sim.move_to_com()
+    sim.integrator = "pfvi"
+    return sim
+
+
+def test_a_refused_step_after_an_output_leaves_the_output_shown():
+    # The force turns non-finite (a callback pfvi cannot see change) while
+    # an output is shown: an output inside the step is refused with the
+    # simulation as the call found it, bit for bit; a call past the step
+    # takes up the run's state (a step of its own), then refuses the next.
+    broken = {"on": False}
+
+    def force(sim_pointer):
+        if broken["on"]:
+            sim_pointer.contents.particles[1].ax = float("nan")
+
+    sim = kepler()
+    sim.additional_forces = force
+    sim.integrate(1.0)
+    t_real = sim.integrator.output_t_real
+    before = (sim.t, state(sim).tobytes())
+    broken["on"] = True
+    with pytest.raises(RuntimeError):
+        sim.integrate(0.5*(1.0 + t_real))
+    assert (sim.t, state(sim).tobytes()) == before
+    with pytest.raises(RuntimeError):
+        sim.integrate(2.0)
+    assert sim.t == t_real
+    broken["on"] = False
+    sim.integrate(2.0)  # and goes on from there
+    assert sim.t == 2.0
