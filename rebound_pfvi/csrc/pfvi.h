@@ -132,11 +132,13 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // step density sigma = (sum_i omega_i^K)^(1/K) of the pairs' frequencies
 // omega_i^2 = G (m_i + m_partner)/r^3, and kappa = (epsilon/C_s)^(1/(2s - 2))
 // (C_s: PFVI_SYMMETRIC_CONSTANTS, measured so that epsilon is about the
-// relative position error per orbit at e = 0.5), at most KAPPA_MAX: where the
-// Newton stage solve keeps a margin of 2 (with fixed steps at s = 8 it
-// converges in 3 to 5 rounds up to kappa 4 to 5, docs/solve.md) and the
-// error model still holds (Kepler e = 0 ... 0.99 at s = 8 and epsilon up to
-// 1e-3, kappa 1.9: at most 0.6 epsilon a n). The fixed-point solve held it at 1.
+// relative position error per orbit at e = 0.5), at most KAPPA_MAX. The
+// Newton stage solve converges far beyond it (with fixed steps at s = 8 in
+// 3 to 5 rounds up to kappa 4 to 5, docs/solve.md), but above 1 the track's
+// drift correction fires on Kepler orbits (measured, 200 orbits at s = 8:
+// one asymmetric step at e >= 0.5 and kappa 1.16, 796 of 1394 steps at
+// e = 0.7 and kappa 1.6), breaking the steps' time symmetry: the cap stays
+// at 1 until the track holds there.
 #define PFVI_DENSITY_NORM 8
 // e^2 beyond which the eccentricity factor (1 - e^2)^(-gamma) is held
 // (e = 0.999; unbound and radial pairs get it too): beyond it epsilon's
@@ -147,7 +149,7 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 #define PFVI_DENSITY_NEGLIGIBLE 0.3
 #define PFVI_SYMMETRIC_CONSTANTS {0., 0., 14., 0.32, 0.019, 8.3e-4, 4.4e-5, 2.3e-6, 1.2e-7}
 #define PFVI_SYMMETRIC_BETA {0., 0., 1.5, 2.2, 2.5, 3.0, 3.4, 3.8, 4.2}
-#define PFVI_KAPPA_MAX 2.0
+#define PFVI_KAPPA_MAX 1.0
 // Epsilon below which the symmetric control's error per orbit stops
 // falling (round-off; measured, Kepler e = 0.5, 10 orbits): a smaller
 // request is taken as this, per s. (Above C_s KAPPA_MAX^(2s - 2) kappa is
