@@ -166,9 +166,7 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // density beat at their synodic period; the track's drift from it took 67
 // corrections (asymmetric steps) over 1e4 Jupiter orbits of the outer solar
 // system and the energy error grew 12-fold (docs/roundoff.md). 0: unweighted.
-#ifndef PFVI_ENCOUNTER_WEIGHTED
 #define PFVI_ENCOUNTER_WEIGHTED 1
-#endif
 // The a posteriori check of a symmetric step: its stages resolve each
 // particle's acceleration to u = ((s - 1)! |D|/A)^(1/(s - 1)) (D the leading
 // coefficient of their polynomial, A the largest |a|), about h times the
