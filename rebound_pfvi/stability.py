@@ -326,8 +326,9 @@ def _planetary_energy_case():
     return Case("planetary-energy", "outer solar system (the Sun, four giants and a Pluto-like body) over 1000 "
                 "Jupiter orbits, 1.2e4 yr: a planetary system's energy at the defaults, held to 1e-9",
                 scene.build, 1000.0 * jupiter, jupiter, tolerance=verdict.Tolerance(energy=1e-9, position=1e-2),
-                note="docs/roundoff.md and benchmarks/planetary_energy.py: the step track's corrections make "
-                     "pfvi's energy error at the defaults grow over 1e4 and more orbits.")
+                note="docs/roundoff.md and benchmarks/planetary_energy.py: before the planets' encounter terms "
+                     "were weighted by their pull (issue 36), the step track's corrections (asymmetric steps) "
+                     "made pfvi's energy error at the defaults grow over 1e4 and more orbits.")
 
 
 def _compact_planets_case():
