@@ -297,6 +297,74 @@ def _stiff_binary():
                 build, 1e4 * P_in, P_in)
 
 
+#: A compact system of five planets (Kepler-11-like): (a [AU], m [Msun]) about a Sun, e = 0.02.
+COMPACT_PLANETS = ((0.091, 1.3e-5), (0.107, 2.7e-5), (0.155, 2.4e-5), (0.195, 2.5e-5), (0.25, 2.5e-5))
+
+
+def compact_planets():
+    """Five planets of 13 to 27 Earth masses at 0.091 to 0.25 AU about a Sun
+    (e = 0.02, inclinations 0 to 2 deg): a compact multi-planet system, whose
+    step density has as many frequencies as planets."""
+    sim = scenes.new_simulation()
+    sim.add(m=1.0)
+    for i, (a, m) in enumerate(COMPACT_PLANETS):
+        sim.add(m=m, a=a, e=0.02, inc=math.radians(0.5 * i), M=1.0 + 2.1 * i, omega=0.7 * i,
+                primary=sim.particles[0])
+    sim.move_to_com()
+    return sim
+
+
+def compact_planets_period():
+    """The innermost planet's period: the orbits the compact system counts."""
+    return _period(COMPACT_PLANETS[0][0], 1.0)
+
+
+def _planetary_energy_case():
+    """The outer solar system over 1000 Jupiter orbits, held to 1e-9 in energy."""
+    scene = scenes.make("outer-solar-system")
+    jupiter = _period(5.2026, 1.0)
+    return Case("planetary-energy", "outer solar system (the Sun, four giants and a Pluto-like body) over 1000 "
+                "Jupiter orbits, 1.2e4 yr: a planetary system's energy at the defaults, held to 1e-9",
+                scene.build, 1000.0 * jupiter, jupiter, tolerance=verdict.Tolerance(energy=1e-9, position=1e-2),
+                note="docs/roundoff.md and benchmarks/planetary_energy.py: before the planets' encounter terms "
+                     "were weighted by their pull (issue 36), the step track's corrections (asymmetric steps) "
+                     "made pfvi's energy error at the defaults grow over 1e4 and more orbits.")
+
+
+def _compact_planets_case():
+    period = compact_planets_period()
+    return Case("compact-planets", "compact system: five planets of 13-27 Earth masses at 0.091-0.25 AU "
+                "(Kepler-11-like), 1000 orbits of the innermost, held to 1e-7 in energy", compact_planets,
+                1000.0 * period, period, tolerance=verdict.Tolerance(energy=1e-7, position=1e-2))
+
+
+#: The Centaur: a massless body (a = 7.5 AU, e = 0.35, inclination 6 deg)
+#: crossing Jupiter's and Saturn's orbits.
+CENTAUR = dict(a=7.5, e=0.35, inc=math.radians(6.0), Omega=0.3, omega=1.1, M=0.5)
+
+
+def centaur(**elements: float):
+    """The Sun, Jupiter, Saturn and a massless Centaur crossing both orbits
+    (closest approaches: 0.22 AU to Jupiter, within its Hill radius, and
+    0.6 AU to Saturn within 411 yr); `elements` replace CENTAUR's."""
+    sim = scenes.new_simulation()
+    sim.add(m=1.0)
+    sim.add(m=scenes.JUPITER["m"], a=scenes.JUPITER["a"], e=scenes.JUPITER["e"])
+    sim.add(m=2.857e-4, a=9.5549, e=0.0555, inc=math.radians(2.49), M=2.0)
+    sim.add(m=0.0, **{**CENTAUR, **elements})
+    sim.move_to_com()
+    return sim
+
+
+def _centaur_case():
+    period = _period(CENTAUR["a"], 1.0)
+    return Case("centaur", "massless Centaur (a = 7.5 AU, e = 0.35) crossing Jupiter's and Saturn's orbits, "
+                "20 of its orbits (411 yr): encounters with two giants, 0.22 AU from Jupiter at the closest",
+                centaur, 20.0 * period, _period(scenes.JUPITER["a"], 1.0),
+                note="Chaotic: a shift of 1e-10 AU grows 1.3e7-fold over the run (IAS15 at 1e-11), so "
+                     "every run's position error is its error per orbit amplified (docs/stability.md).")
+
+
 def _u_at_pericentre_dt(e, u):
     """The step at which u = omega dt at pericentre of a unit orbit (Sun + 1e-3) equals u."""
     G, mass, a = _G(), 1.001, 1.0
@@ -332,6 +400,9 @@ def _build_cases():
     cases.append(_kepler_case("long-e0.99", "10^5 periods at e = 0.99 (stopped by the budget if slower)",
                               0.99, 1e5))
     cases.append(_stiff_binary())
+    cases.append(_planetary_energy_case())
+    cases.append(_compact_planets_case())
+    cases.append(_centaur_case())
     return {c.name: c for c in cases}
 
 

@@ -164,6 +164,15 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // An encounter term is nu_cr (1 + c cos^2 theta) (theta between the pair's
 // r and v): c (pfvi_timescales.c).
 #define PFVI_ENCOUNTER_APPROACH 1.0
+// The encounter term of a pair that is neither body's partner is weighted
+// by (R/(1 + R))^(1/(2s - 2)), R the pair's pull on each body against its
+// partner's (summed over the two bodies): the error an unresolved pull leaves
+// scales with it. Two planets about a star (Jupiter and Saturn: R ~ 5e-3)
+// had encounter terms as large as Jupiter's orbit term, which made the
+// density beat at their synodic period; the track's drift from it took 67
+// corrections (asymmetric steps) over 1e4 Jupiter orbits of the outer solar
+// system and the energy error grew 12-fold (docs/roundoff.md). 0: unweighted.
+#define PFVI_ENCOUNTER_WEIGHTED 1
 // The a posteriori check of a symmetric step: its stages resolve each
 // particle's acceleration to u = ((s - 1)! |D|/A)^(1/(s - 1)) (D the leading
 // coefficient of their polynomial, A the largest |a|), about h times the
@@ -217,6 +226,13 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // back onto lambda sigma by it (a step that is not time-symmetric: counted in
 // n_asymmetric). On Kepler orbits the average stays within 0.025 (measured,
 // e = 0.5 ... 0.99, epsilon 1e-6 and 1e-12): the correction does not fire.
+// The wander on planetary systems came from the planets' mutual encounter
+// terms (PFVI_ENCOUNTER_WEIGHTED): weighted, the average stays within 0.005
+// on the outer solar system over 1e4 Jupiter orbits (no correction) and
+// within 0.1 on a compact five-planet system (about one correction per 1e3
+// orbits). Spreading the correction over many intervals made the energy
+// error grow faster (it is asymmetric every interval it acts), and a
+// time-symmetric spring on the mismatch was unstable (docs/roundoff.md).
 #define PFVI_TRACK_MISMATCH_WEIGHT (1./32.)
 #define PFVI_TRACK_MISMATCH_MAX 0.1
 // Outputs (pfvi_output.c): a requested time within OUTPUT_NEAR of the run's
@@ -504,6 +520,8 @@ struct pfvi_partner {
     size_t j;           // SIZE_MAX: none (gravity off, G = 0, or no other attracting body)
     size_t image;       // the ghost box j's image lies in (0: the box itself)
     double stiffness;   // (m_i + m_j)/r^3, 0 without a partner
+    double pull;        // m_j/r^2 (softened), and its d log/dt: filled by
+    double dlog_pull;   // pfvi_step_density for the encounter terms' weights
 };
 // Every body's partner (pfvi_timescales.c).
 PFVI_INTERNAL void pfvi_partner_search(const struct reb_particle* p, size_t N, const struct pfvi_field* f,

@@ -274,11 +274,102 @@ static void density_add(struct density_sum* d, double term, double dlog, double 
     }
 }
 
+// Each body's partner's pull m_j/r^2 (softened, G left out) and its d log/dt,
+// for the encounter terms' weights; 0 without a massive partner.
+static void partner_pulls(const struct reb_particle* p, size_t N, const struct pfvi_field* f,
+        struct pfvi_partner* partners){
+    for (size_t b=0; b<N; b++){
+        struct pfvi_partner* const q = &partners[b];
+        q->pull = 0.;
+        q->dlog_pull = 0.;
+        if (q->j == SIZE_MAX || !(p[q->j].m > 0.)){
+            continue;
+        }
+        const struct reb_vec6d* const sh = &f->images[q->image];
+        const double e[3] = {(p[q->j].x + sh->x) - p[b].x, (p[q->j].y + sh->y) - p[b].y, (p[q->j].z + sh->z) - p[b].z};
+        const double u[3] = {(p[q->j].vx + sh->vx) - p[b].vx, (p[q->j].vy + sh->vy) - p[b].vy,
+            (p[q->j].vz + sh->vz) - p[b].vz};
+        const double r2 = (e[0]*e[0] + e[1]*e[1] + e[2]*e[2]) + f->softening2;
+        q->pull = p[q->j].m/r2;
+        q->dlog_pull = -2.*(e[0]*u[0] + e[1]*u[1] + e[2]*u[2])/r2;
+        if (!(q->pull > 0.) || !isfinite(q->pull) || !isfinite(q->dlog_pull)){
+            q->pull = 0.;
+            q->dlog_pull = 0.;
+        }
+    }
+}
+
+// How strongly `other` (mass m_other, relative position d and velocity w
+// from body b) pulls on b against b's partner: R = (m_other/r^2)/pull (with
+// d log R/dt). Infinite where the other body is b's partner (in that image)
+// or b has no massive partner.
+static double pull_ratio(const struct pfvi_field* f, const struct pfvi_partner* partners, size_t b, size_t other,
+        size_t image, double m_other, const double d[3], const double w[3], double* dlog){
+    *dlog = 0.;
+    const struct pfvi_partner* const q = &partners[b];
+    if (!(q->pull > 0.) || (q->j == other && q->image == image)){
+        return INFINITY;
+    }
+    if (!(m_other > 0.)){
+        return 0.;
+    }
+    const double rd2 = (d[0]*d[0] + d[1]*d[1] + d[2]*d[2]) + f->softening2;
+    *dlog = -q->dlog_pull - 2.*(d[0]*w[0] + d[1]*w[1] + d[2]*w[2])/rd2;
+    return (m_other/rd2)/q->pull;
+}
+
+// The pair (i, j's image g) an encounter term belongs to, for its weight.
+struct encounter_pair {
+    const struct reb_particle* p;
+    const struct pfvi_field* f;
+    const struct pfvi_partner* partners;
+    size_t i, j, g;
+    int i_attracts;
+    double exponent;    // 1/(2s - 2); 0: unweighted
+    int order;          // 2s - 2
+};
+
+// The weight (R/(1 + R))^(1/(2s - 2)) of a pair's encounter term, R = R_i +
+// R_j its pull on each body against the body's partner (pfvi.h,
+// PFVI_ENCOUNTER_WEIGHTED), and d log(weight)/dt; 1 where the pair is either
+// body's tightest. Returns 0 where the weight is 0.
+static int encounter_weight(const struct encounter_pair* q, const double d[3], const double w[3], double least,
+        double* weight, double* dlog){
+    *weight = 1.;
+    *dlog = 0.;
+    if (!(q->exponent > 0.)){
+        return 1;
+    }
+    const double dm[3] = {-d[0], -d[1], -d[2]}, wm[3] = {-w[0], -w[1], -w[2]};
+    double dlog_i, dlog_j;
+    const double R_i = pull_ratio(q->f, q->partners, q->i, q->j, q->g, q->p[q->j].m, d, w, &dlog_i);
+    if (!isfinite(R_i)){
+        return 1;
+    }
+    const double R_j = pull_ratio(q->f, q->partners, q->j, q->i, q->f->n_images - 1 - q->g,
+        q->i_attracts ? q->p[q->i].m : 0., dm, wm, &dlog_j);
+    if (!isfinite(R_j)){
+        return 1;
+    }
+    const double R = R_i + R_j;
+    // A weight below `least` (the term would be negligible): no pow().
+    double floor = 1.;
+    for (int k=0; k<q->order; k++){
+        floor *= least;
+    }
+    if (!(R > 0.) || R/(1. + R) < floor){
+        return 0;
+    }
+    *weight = pow(R/(1. + R), q->exponent);
+    *dlog = q->exponent*(R_i*dlog_i + R_j*dlog_j)/(R*(1. + R));
+    return isfinite(*weight) && isfinite(*dlog);
+}
+
 // An encounter term of one pair (or image): relative position d, velocity
 // w, acceleration b, mu = G (m_i + m_j); nothing if the pair is bound or the
 // term could not reach `negligible` (it is at most the crossing rate).
 static void encounter_term(const double d[3], const double w[3], const double b[3], double mu,
-        const struct pfvi_field* f, double negligible, struct density_sum* sum){
+        const struct pfvi_field* f, double negligible, const struct encounter_pair* pair, struct density_sum* sum){
     const double rs2 = (d[0]*d[0] + d[1]*d[1] + d[2]*d[2]) + f->softening2;
     const double v2 = w[0]*w[0] + w[1]*w[1] + w[2]*w[2];
     // Bound (q^2 = v^2 rs/mu <= 2, written without a root), or not a number: no term.
@@ -294,10 +385,16 @@ static void encounter_term(const double d[3], const double w[3], const double b[
     if (!(v2*boost*boost > negligible*negligible*rs2)){
         return;
     }
+    double weight = 1., dlog_weight = 0.;
+    // The weight the term needs to reach `negligible` (it is below nu_cr (1 + c C) weight).
+    const double least = negligible*sqrt(rs2/v2)/boost;
+    if (!encounter_weight(pair, d, w, least, &weight, &dlog_weight)){
+        return;
+    }
     const double rs = sqrt(rs2);
     const double q = sqrt(v2*rs/mu);     // nu_cr/nu_ff
     const double nu_ff = sqrt(mu/(rs2*rs));
-    const double term = nu_ff*(q - M_SQRT2)*boost;
+    const double term = nu_ff*(q - M_SQRT2)*boost*weight;
     if (!(term > negligible) || !isfinite(term)){
         return;
     }
@@ -307,7 +404,7 @@ static void encounter_term(const double d[3], const double w[3], const double b[
     // d(d.w)/dt = v^2 + d.b.
     const double dlog_q = wb/v2 + 0.5*P/rs2;
     const double dC = 2.*P*(v2 + db)/(v2*rs2) - 2.*C*(wb/v2 + P/rs2);
-    const double dlog = -1.5*P/rs2 + (q/(q - M_SQRT2))*dlog_q + PFVI_ENCOUNTER_APPROACH*dC/boost;
+    const double dlog = -1.5*P/rs2 + (q/(q - M_SQRT2))*dlog_q + PFVI_ENCOUNTER_APPROACH*dC/boost + dlog_weight;
     if (isfinite(dlog)){
         density_add(sum, term, dlog, 1.);
     }
@@ -349,6 +446,10 @@ int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state*
         }
     }
     if (sum.largest > 0.){
+        const double exponent = PFVI_ENCOUNTER_WEIGHTED ? 1./(2.*s - 2.) : 0.;
+        if (exponent > 0.){
+            partner_pulls(p, N, f, partners);
+        }
         const size_t n_attracting = (f->N_active < N) ? f->N_active : N;
         for (size_t i=0; i<N; i++){
             const int i_attracts = attracts(p, i, n_attracting);
@@ -367,7 +468,8 @@ int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state*
                         (p[j].z + sh->z) - p[i].z};
                     const double w[3] = {(p[j].vx + sh->vx) - p[i].vx, (p[j].vy + sh->vy) - p[i].vy,
                         (p[j].vz + sh->vz) - p[i].vz};
-                    encounter_term(d, w, b, mu, f, PFVI_DENSITY_NEGLIGIBLE*sum.largest, &sum);
+                    const struct encounter_pair pair = {p, f, partners, i, j, g, i_attracts, exponent, 2*s - 2};
+                    encounter_term(d, w, b, mu, f, PFVI_DENSITY_NEGLIGIBLE*sum.largest, &pair, &sum);
                 }
             }
         }
