@@ -253,6 +253,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_INT, "predictor_stages", offsetof(struct pfvi_state, predictor_stages), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_h", offsetof(struct pfvi_state, predictor_h), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_t", offsetof(struct pfvi_state, predictor_t), 0, 0, 0 },
+    { "", REB_INT, "contact_chain", offsetof(struct pfvi_state, contact_chain), 0, 0, 0 },
     PFVI_STATISTIC("steps taken by this integrator.", REB_UINT64, n_steps),
     PFVI_STATISTIC("particle-steps in which u = omega*dt exceeded u_max and was limited, "
         "or omega exceeded " PFVI_STR(PFVI_OMEGA_MAX) " (omega^2 beyond the doubles) and the particle "
@@ -306,6 +307,19 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     PFVI_STATISTIC("trial steps halved because their stage solve did not converge (included in "
         "n_rejected; with the symmetric control such a step is not time-symmetric).",
         REB_UINT64, n_solve_halved),
+    PFVI_STATISTIC("steps retaken to end at a contact inside them: with collisions on (sim.collision not "
+        "'none') and a radius set, or sim.exit_min_distance set, each step taken is searched for the first "
+        "time two bodies come closer than the sum of their radii or exit_min_distance, along the "
+        "polynomial through its stages (positions and accelerations at its nodes, velocities at its "
+        "ends; candidate pairs by a bound from each body's nodes); the step is retaken to end there, "
+        PFVI_STR(PFVI_CONTACT_DEPTH) " of the limit inside it (at most half the dip), so that REBOUND's "
+        "collision search and resolve and its Encounter see the contact at the step's end. Included in "
+        "n_rejected and n_asymmetric; the steps are not time-symmetric (docs/collisions.md).",
+        REB_UINT64, n_contact_steps),
+    PFVI_STATISTIC("steps kept past a contact their path showed, because " PFVI_STR(PFVI_CONTACT_RETAKES)
+        " steps in a row had been retaken to end at a contact their end did not reach (a minimum "
+        "separation within the step's error of the limit); they are kept until no contact is "
+        "predicted.", REB_UINT64, n_contact_kept),
     PFVI_STATISTIC("smallest omega used in the last step (after limiting).",
         REB_DOUBLE, omega_min),
     PFVI_STATISTIC("largest omega used in the last step (after limiting).",
@@ -713,6 +727,11 @@ static double pfvi_fixed_step(struct reb_simulation* r, struct pfvi_state* st, s
     return h;
 }
 
+// One step: fixed (epsilon 0) or by the step control.
+static double pfvi_take(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
+    return (st->options.epsilon == 0.) ? pfvi_fixed_step(r, st, N, t0) : pfvi_controlled_step(r, st, N, t0);
+}
+
 static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
     if (!pfvi_options_valid(r, &st->settings)){
         return;
@@ -760,7 +779,9 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
     if (!pfvi_step_start(r, st, N, t0)){
         return;
     }
-    const double h = (st->options.epsilon == 0.) ? pfvi_fixed_step(r, st, N, t0) : pfvi_controlled_step(r, st, N, t0);
+    // With collisions and radii, or exit_min_distance: retaken to end at the
+    // first contact its path shows (pfvi_contact.c).
+    const double h = pfvi_contact_enabled(r) ? pfvi_contact_step(r, st, N, t0, pfvi_take) : pfvi_take(r, st, N, t0);
     if (h == 0.){
         pfvi_report(r, st);
         return;
