@@ -314,7 +314,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "ends; candidate pairs by a bound from each body's nodes); the step is retaken to end there, "
         PFVI_STR(PFVI_CONTACT_DEPTH) " of the limit inside it (at most half the dip), so that REBOUND's "
         "collision search and resolve and its Encounter see the contact at the step's end. Included in "
-        "n_rejected and n_asymmetric; the steps are not time-symmetric (docs/collisions.md).",
+        "n_rejected and n_asymmetric; the steps are not time-symmetric (rebound_pfvi's docs, collisions).",
         REB_UINT64, n_contact_steps),
     PFVI_STATISTIC("steps kept past a contact their path showed, because " PFVI_STR(PFVI_CONTACT_RETAKES)
         " steps in a row had been retaken to end at a contact their end did not reach (a minimum "
