@@ -56,12 +56,10 @@ def set_integrator(sim, integrator):
     name, _, eps = integrator.partition(":")
     sim.integrator = name
     if eps:
-        if name == "pfvi":
+        if name in ("pfvi", "ias15"):
             sim.integrator.epsilon = float(eps)
-        elif name == "ias15":
-            sim.ri_ias15.epsilon = float(eps)
         elif name == "bs":
-            sim.ri_bs.eps_rel = sim.ri_bs.eps_abs = float(eps)
+            sim.integrator.eps_rel = sim.integrator.eps_abs = float(eps)
 
 
 def kepler_time_to(sim, radius):
@@ -69,10 +67,16 @@ def kepler_time_to(sim, radius):
     o = sim.particles[1].orbit(primary=sim.particles[0])
     p = o.a * (1 - o.e * o.e)
     cosf = (p / radius - 1) / o.e
-    if cosf > 1:
+    if cosf > 1 + 1e-9:
         return math.inf
     fc = -math.acos(max(-1., cosf))
     return mean_anomaly(o.e, fc) / abs(o.n) - mean_anomaly(o.e, math.remainder(o.f, 2 * math.pi)) / abs(o.n)
+
+
+def t_peri(sim):
+    """Time from now to the pericentre of the relative orbit."""
+    o = sim.particles[1].orbit(primary=sim.particles[0])
+    return -mean_anomaly(o.e, math.remainder(o.f, 2 * math.pi)) / abs(o.n)
 
 
 def mean_anomaly(e, f):
@@ -91,7 +95,7 @@ def graze(integrators=("pfvi", "ias15", "bs")):
                 row = {"e": e, "collision": coll, "x": x}
                 for name in integrators:
                     sim = encounter(x, e, name, coll)
-                    sim.integrate(2 * kepler_time_to(sim, x * R_SUM))
+                    sim.integrate(2 * t_peri(sim))
                     row[name] = sim.N == 1
                 rows.append(row)
     return rows
@@ -109,7 +113,7 @@ def contact_time(integrators=("pfvi", "ias15", "ias15:1e-12", "bs")):
             for name in integrators:
                 sim = encounter(x, e, name, "direct", "halt")
                 try:
-                    sim.integrate(2 * kepler_time_to(sim, x * R_SUM))
+                    sim.integrate(2 * t_peri(sim))
                     row[name] = math.nan
                 except rebound.Collision:
                     row[name] = (sim.t - t_true) * v / R_SUM
@@ -130,7 +134,7 @@ def exit_scan(integrators=("pfvi", "ias15", "bs")):
                     sim.exit_min_distance = limit
                     t_true = kepler_time_to(sim, limit)
                     try:
-                        sim.integrate(2 * kepler_time_to(sim, q))
+                        sim.integrate(2 * t_peri(sim))
                         row[name] = None
                     except rebound.Encounter:
                         row[name] = (sim.t - t_true) / t_true if t_true < math.inf else math.inf

@@ -339,13 +339,14 @@ static double contact_first(const double coef[3][2*PFVI_STAGES_MAX+2], int m, do
                 bottom = f_min;
                 hi = at;
             }
-        }else if (p >= 2 && f_prev <= f_prev2 && f_prev <= f){
-            // A sampled minimum at the last sample: the dip may go below between samples.
+        }else if (f_prev <= f_prev2 && f_prev <= f){
+            // A sampled minimum at the last sample (or at the start, rising
+            // from there): the dip may go below between samples.
             double at;
-            const double f_min = contact_minimum(coef, m, (p - 2.)/PFVI_CONTACT_SAMPLES, tau, &at);
+            lo = (p >= 2) ? (p - 2.)/PFVI_CONTACT_SAMPLES : 0.;
+            const double f_min = contact_minimum(coef, m, lo, tau, &at);
             if (f_min < limit2){
                 bottom = f_min;
-                lo = (p - 2.)/PFVI_CONTACT_SAMPLES;
                 hi = at;
             }
         }
