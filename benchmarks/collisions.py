@@ -151,7 +151,8 @@ def scattering(seed, integrator, t_end=1000.):
         m = 10 ** rng.uniform(-4, -3)
         sim.add(m=m, r=0.01 * (m / 1e-3) ** (1 / 3) * 3, a=a, e=rng.uniform(0, 0.05),
                 inc=rng.uniform(0, 0.02), Omega=rng.uniform(0, 2 * math.pi),
-                omega=rng.uniform(0, 2 * math.pi), f=rng.uniform(0, 2 * math.pi), hash=k + 1)
+                omega=rng.uniform(0, 2 * math.pi), f=rng.uniform(0, 2 * math.pi))
+        sim.particles[-1].hash = k + 1
         a *= 1 + 2.5 * (2 * 1e-3 / 3) ** (1 / 3)
     sim.move_to_com()
     set_integrator(sim, integrator)
