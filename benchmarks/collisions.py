@@ -142,21 +142,25 @@ def exit_scan(integrators=("pfvi", "ias15", "bs")):
     return rows
 
 
-def scattering(seed, integrator, t_end=1000.):
+def scattering_sim(seed, integrator):
     rng = np.random.default_rng(seed)
     sim = rebound.Simulation()
-    sim.add(m=1.0, r=0.005)
+    sim.add(m=1.0, r=0.005, name="star")
     a = 1.0
     for k in range(9):
         m = 10 ** rng.uniform(-4, -3)
         sim.add(m=m, r=0.01 * (m / 1e-3) ** (1 / 3) * 3, a=a, e=rng.uniform(0, 0.05),
                 inc=rng.uniform(0, 0.02), Omega=rng.uniform(0, 2 * math.pi),
-                omega=rng.uniform(0, 2 * math.pi), f=rng.uniform(0, 2 * math.pi))
-        sim.particles[-1].hash = k + 1
+                omega=rng.uniform(0, 2 * math.pi), f=rng.uniform(0, 2 * math.pi), name=f"p{k + 1}")
         a *= 1 + 2.5 * (2 * 1e-3 / 3) ** (1 / 3)
     sim.move_to_com()
     set_integrator(sim, integrator)
     sim.collision = "direct"
+    return sim
+
+
+def scattering(seed, integrator, t_end=1000.):
+    sim = scattering_sim(seed, integrator)
     first = []
 
     def resolve(sim_pointer, collision):
@@ -166,7 +170,7 @@ def scattering(seed, integrator, t_end=1000.):
         i, j = sorted((collision.p1, collision.p2))
         pi, pj = ps[i], ps[j]
         if not first:
-            first.append((s.t, tuple(sorted((pi.hash.value, pj.hash.value)))))
+            first.append((s.t, tuple(sorted((pi.name, pj.name)))))
         m = pi.m + pj.m
         for f in ("x", "y", "z", "vx", "vy", "vz"):
             setattr(pi, f, (pi.m * getattr(pi, f) + pj.m * getattr(pj, f)) / m)
@@ -182,6 +186,29 @@ def scattering(seed, integrator, t_end=1000.):
     t_first, pair = first[0] if first else (math.nan, None)
     return {"mergers": n0 - sim.N, "t_first": t_first, "pair": pair, "wall": wall,
             "steps": sim.steps_done, "contact_steps": sim.integrator.n_contact_steps if integrator.startswith("pfvi") else 0}
+
+
+def first_contact_reference(seed, samples=2000):
+    """The first merger's time by IAS15 at epsilon 1e-12 with a contact search along its
+    steps: halted at the first step end in contact, the step is taken again from its
+    start in `samples` equal parts (exact finish at each), halted at the first inside."""
+    sim = scattering_sim(seed, "ias15:1e-12")
+    sim.collision_resolve = "halt"
+    try:
+        sim.integrate(1000.)
+        return math.nan
+    except rebound.Collision:
+        pass
+    t_hit, h = sim.t, sim.dt_last_done
+    sim = scattering_sim(seed, "ias15:1e-12")
+    sim.collision_resolve = "halt"
+    sim.integrate(t_hit - h)
+    try:
+        for k in range(1, samples + 1):
+            sim.integrate(t_hit - h + k * h / samples)
+    except rebound.Collision:
+        return sim.t
+    return t_hit
 
 
 def ensemble(seeds, integrators=("pfvi", "ias15", "ias15:1e-12")):
@@ -227,6 +254,26 @@ def cost(sizes=((100, 200), (2000, 3))):
         a, b = times[0.][0], times[1e-4][0]
         print(f"| {N} | {steps} | {a:.3g} | {b:.3g} | {100 * (b / a - 1):+.1f}% | contact steps {times[1e-4][1]} |")
     print()
+
+
+def pages(names=("kepler", "comet", "triple", "jupiter-comet", "sungrazer", "circumbinary", "outer-solar-system"),
+          repeats=int(__import__("os").environ.get("PFVI_REPEATS", "5"))):
+    """pfvi's defaults on the pages' scenes (no radii, no exit_min_distance): best wall time of
+    `repeats`. Run under this build and under one without the contact search to compare."""
+    from rebound_pfvi import scenes
+    print("| scene | steps | best wall [s] |")
+    print("|---|---|---|")
+    for name in names:
+        scene = scenes.make(name)
+        best = math.inf
+        for _ in range(repeats):
+            sim = scene.build()
+            sim.integrator = "pfvi"
+            t = time.perf_counter()
+            sim.integrate(scene.t_end)
+            best = min(best, time.perf_counter() - t)
+        print(f"| {name} | {sim.integrator.n_steps} | {best:.4f} |")
+        sys.stdout.flush()
 
 
 def main(argv=None):
@@ -277,16 +324,24 @@ def main(argv=None):
             m = [r["mergers"] for r in res[n]]
             print(f"{n}: mergers {sum(m)}, wall {sum(r['wall'] for r in res[n]):.1f} s, "
                   f"steps {sum(r['steps'] for r in res[n])}, contact steps {sum(r['contact_steps'] for r in res[n])}")
+        refs = [first_contact_reference(k) for k in range(args.seeds)]
+        print("first merger against IAS15 at 1e-12 with a contact search along its steps (2000 parts of the "
+              "step that found it), relative time difference:")
+        for n in names:
+            rel = [abs(r["t_first"] - t) / t for r, t in zip(res[n], refs) if t == t]
+            print(f"  {n}: median {np.median(rel):.2g}, max {max(rel):.2g} ({len(rel)} seeds)")
         for n in names[:-1]:
             d = np.array([r["mergers"] for r in res[n]]) - np.array([r["mergers"] for r in res[ref]])
             same = [(a["t_first"], b["t_first"]) for a, b in zip(res[n], res[ref]) if a["pair"] == b["pair"]]
-            rel = [abs(a - b) / b for a, b in same]
+            rel = [abs(a - b) / b for a, b in same if b == b]
             print(f"{n} - {ref}: per-seed merger difference mean {d.mean():+.2f} +- {d.std(ddof=1) / math.sqrt(len(d)):.2f} "
                   f"(sd {d.std(ddof=1):.2f}); same first pair in {len(same)}/{len(d)} seeds, first-merger time "
-                  f"relative difference there: median {np.median(rel) if rel else math.nan:.2g}, max {max(rel) if rel else math.nan:.2g}")
+                  f"relative difference there: median {np.nanmedian(rel) if rel else math.nan:.2g}, max {max(rel) if rel else math.nan:.2g}")
         print()
     if "cost" in parts:
         cost()
+    if "pages" in parts:
+        pages()
     if "exit" in parts:
         rows = exit_scan()
         print("## exit_min_distance = q (1 +- 1e-6): Encounter raised (relative time error against the "

@@ -1080,8 +1080,9 @@ PFVI_INTERNAL int pfvi_contact_enabled(const struct reb_simulation* r);
 // (rolled back, the controller as before the step, the step capped by
 // sim.dt). Returns the h taken, 0 if none (fault recorded).
 struct pfvi_contact_body {
-    double c[3];     // the midpoint of the body's ends over the step
-    double reach;    // its path's bound about c, plus its radius and half exit_min_distance
+    double lo[PFVI_STAGES_MAX-1][3];  // the box of its path between nodes k and k + 1, with
+    double hi[PFVI_STAGES_MAX-1][3];  // its sag, its radius and half exit_min_distance
+    double sag;      // how far its path may leave the chords between its nodes
 };
 PFVI_INTERNAL double pfvi_contact_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
         double (*take)(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0));

@@ -10,8 +10,8 @@
  * path over the step: the polynomial x(tau), tau = (t - t0)/h in [0, 1], of
  * degree 2s through its positions and accelerations at the s nodes (the
  * mean of those through its velocity at either end). After a step is taken, the pairs whose paths
- * can come within the limit (a bound from each body's nodes, swept along x:
- * O(N log N + candidates), not O(N^2)) are searched along that polynomial
+ * can come within the limit (boxes of each body's path between two nodes,
+ * swept along x: O(s N log N + candidates), not O(N^2)) are searched along that polynomial
  * for the first time the separation falls below the sum of their radii
  * (collisions on) or exit_min_distance; if one does before the step's end,
  * the step is retaken (rolled back, the controller as before it) capped to
@@ -202,9 +202,9 @@ static void contact_node(const struct reb_simulation* r, const struct pfvi_state
     }
 }
 
-// Each body's bound over the step: centre, and reach (the nodes' spread
-// about it plus the sag between nodes, its radius if collisions are on, half
-// exit_min_distance).
+// Each body's bounds over the step: the box of its path between each two
+// nodes (the chord's ends, widened by its sag, its radius if collisions are
+// on and half exit_min_distance) and the sag.
 static void contact_bounds(const struct reb_simulation* r, struct pfvi_state* st, size_t N, double h, int collide){
     const int s = st->options.stages;
     const double* const c = contact_nodes(st);
@@ -215,25 +215,51 @@ static void contact_bounds(const struct reb_simulation* r, struct pfvi_state* st
     const double sag = PFVI_CONTACT_BOUND_SAFETY*(gap*h)*(gap*h)/8.;
     const double half_limit = 0.5*r->exit_min_distance;
     for (size_t i=0; i<N; i++){
-        const struct reb_particle* const p0 = &st->start[i];
-        const struct reb_particle* const p1 = &r->particles[i];
         struct pfvi_contact_body* const b = &st->contact_bodies[i];
-        b->c[0] = 0.5*(p0->x + p1->x);
-        b->c[1] = 0.5*(p0->y + p1->y);
-        b->c[2] = 0.5*(p0->z + p1->z);
-        double spread2 = 0., a2 = 0.;
+        double x[PFVI_STAGES_MAX][3], a2 = 0.;
         for (int k=0; k<s; k++){
-            double x[3], a[3];
-            contact_node(r, st, i, k, x, a);
-            const double d[3] = {x[0] - b->c[0], x[1] - b->c[1], x[2] - b->c[2]};
-            spread2 = fmax(spread2, d[0]*d[0] + d[1]*d[1] + d[2]*d[2]);
+            double a[3];
+            contact_node(r, st, i, k, x[k], a);
             a2 = fmax(a2, a[0]*a[0] + a[1]*a[1] + a[2]*a[2]);
         }
-        b->reach = sqrt(spread2) + sag*sqrt(a2) + (collide ? fmax(p0->r, 0.) : 0.) + half_limit;
-        if (!(b->reach == b->reach)){
-            b->reach = INFINITY;
+        b->sag = sag*sqrt(a2);
+        double pad = b->sag + (collide ? fmax(st->start[i].r, 0.) : 0.) + half_limit;
+        pad = (pad == pad) ? pad : INFINITY;
+        for (int k=0; k+1<s; k++){
+            for (int d=0; d<3; d++){
+                b->lo[k][d] = fmin(x[k][d], x[k+1][d]) - pad;
+                b->hi[k][d] = fmax(x[k][d], x[k+1][d]) + pad;
+                if (!(b->lo[k][d] == b->lo[k][d]) || !(b->hi[k][d] == b->hi[k][d])){
+                    b->lo[k][d] = -INFINITY;
+                    b->hi[k][d] = INFINITY;
+                }
+            }
         }
     }
+}
+
+// A lower bound on the pair's separation over the step: the closest its
+// relative chords between nodes come to 0, less both bodies' sag.
+static double contact_pair_bound(const struct reb_simulation* r, const struct pfvi_state* st, size_t i, size_t j){
+    const int s = st->options.stages;
+    double closest2 = INFINITY, prev[3] = {0., 0., 0.};
+    for (int k=0; k<s; k++){
+        double xi[3], ai[3], xj[3], aj[3];
+        contact_node(r, st, i, k, xi, ai);
+        contact_node(r, st, j, k, xj, aj);
+        const double d[3] = {xi[0] - xj[0], xi[1] - xj[1], xi[2] - xj[2]};
+        if (k > 0){
+            // distance from 0 to the segment prev -> d
+            const double e[3] = {d[0] - prev[0], d[1] - prev[1], d[2] - prev[2]};
+            const double ee = e[0]*e[0] + e[1]*e[1] + e[2]*e[2];
+            double u = (ee > 0.) ? -(prev[0]*e[0] + prev[1]*e[1] + prev[2]*e[2])/ee : 0.;
+            u = fmin(1., fmax(0., u));
+            const double c[3] = {prev[0] + u*e[0], prev[1] + u*e[1], prev[2] + u*e[2]};
+            closest2 = fmin(closest2, c[0]*c[0] + c[1]*c[1] + c[2]*c[2]);
+        }
+        prev[0] = d[0]; prev[1] = d[1]; prev[2] = d[2];
+    }
+    return sqrt(closest2) - st->contact_bodies[i].sag - st->contact_bodies[j].sag;
 }
 
 // A pair's relative path: Chebyshev coefficients coef[c][n] (n < 2s + 2).
@@ -365,50 +391,72 @@ static double contact_first(const double coef[3][2*PFVI_STAGES_MAX+2], int m, do
     return 2.;
 }
 
+struct contact_order_arg {
+    const struct pfvi_contact_body* bodies;
+    int k;
+};
+
 static int order_by_low_x(const void* a, const void* b, void* arg){
-    const struct pfvi_contact_body* const bodies = arg;
-    const struct pfvi_contact_body *p = &bodies[*(const size_t*)a], *q = &bodies[*(const size_t*)b];
-    const double lp = p->c[0] - p->reach, lq = q->c[0] - q->reach;
+    const struct contact_order_arg* const o = arg;
+    const double lp = o->bodies[*(const size_t*)a].lo[o->k][0], lq = o->bodies[*(const size_t*)b].lo[o->k][0];
     return (lp < lq) ? -1 : (lp > lq) ? 1 : 0;
 }
 
+static int boxes_overlap(const struct pfvi_contact_body* p, const struct pfvi_contact_body* q, int k){
+    return p->lo[k][0] <= q->hi[k][0] && q->lo[k][0] <= p->hi[k][0] && p->lo[k][1] <= q->hi[k][1]
+        && q->lo[k][1] <= p->hi[k][1] && p->lo[k][2] <= q->hi[k][2] && q->lo[k][2] <= p->hi[k][2];
+}
+
 // The earliest tau in (0, 1] of a contact in the step just taken (2: none).
+// Candidates: pairs whose boxes overlap between the same two nodes (swept
+// along x, interval by interval: O(s N log N) plus the overlaps), then the
+// chords' bound; the path is searched for those left.
 static double contact_search(const struct reb_simulation* r, struct pfvi_state* st, size_t N, double h){
     const int collide = (r->collision != REB_COLLISION_NONE);
     const double limit = r->exit_min_distance > 0. ? r->exit_min_distance : 0.;
-    const int m = 2*st->options.stages + 1;
+    const int s = st->options.stages, m = 2*s + 1;
     contact_bounds(r, st, N, h, collide);
     size_t* const order = st->contact_order;
-    for (size_t i=0; i<N; i++){
-        order[i] = i;
-    }
-    qsort_r(order, N, sizeof(*order), order_by_low_x, st->contact_bodies);
     const struct pfvi_contact_body* const b = st->contact_bodies;
     double first = 2.;
-    for (size_t oi=0; oi<N; oi++){
-        const size_t i = order[oi];
-        const double hi_x = b[i].c[0] + b[i].reach;
-        for (size_t oj=oi+1; oj<N; oj++){
-            const size_t j = order[oj];
-            if (b[j].c[0] - b[j].reach > hi_x){
-                break;
-            }
-            const double d[3] = {b[i].c[0] - b[j].c[0], b[i].c[1] - b[j].c[1], b[i].c[2] - b[j].c[2]};
-            const double reach = b[i].reach + b[j].reach;
-            if (!(d[0]*d[0] + d[1]*d[1] + d[2]*d[2] <= reach*reach)){
-                continue;
-            }
-            const double radii = collide ? fmax(st->start[i].r, 0.) + fmax(st->start[j].r, 0.) : 0.;
-            if (!(radii > 0.) && !(limit > 0.)){
-                continue;
-            }
-            double coef[3][2*PFVI_STAGES_MAX+2];
-            contact_path(r, st, i, j, h, coef);
-            if (radii > 0.){
-                first = fmin(first, contact_first(coef, m, radii));
-            }
-            if (limit > 0.){
-                first = fmin(first, contact_first(coef, m, limit));
+    for (int k=0; k+1<s; k++){
+        for (size_t i=0; i<N; i++){
+            order[i] = i;
+        }
+        struct contact_order_arg arg = {b, k};
+        qsort_r(order, N, sizeof(*order), order_by_low_x, &arg);
+        for (size_t oi=0; oi<N; oi++){
+            const size_t i = order[oi];
+            for (size_t oj=oi+1; oj<N; oj++){
+                const size_t j = order[oj];
+                if (!(b[j].lo[k][0] <= b[i].hi[k][0])){
+                    break;
+                }
+                if (!boxes_overlap(&b[i], &b[j], k)){
+                    continue;
+                }
+                int seen = 0;
+                for (int l=0; l<k && !seen; l++){
+                    seen = boxes_overlap(&b[i], &b[j], l);
+                }
+                if (seen){
+                    continue;  // searched at an earlier interval
+                }
+                const double radii = collide ? fmax(st->start[i].r, 0.) + fmax(st->start[j].r, 0.) : 0.;
+                if (!(radii > 0.) && !(limit > 0.)){
+                    continue;
+                }
+                if (contact_pair_bound(r, st, i, j) > fmax(radii, limit)){
+                    continue;
+                }
+                double coef[3][2*PFVI_STAGES_MAX+2];
+                contact_path(r, st, i, j, h, coef);
+                if (radii > 0.){
+                    first = fmin(first, contact_first(coef, m, radii));
+                }
+                if (limit > 0.){
+                    first = fmin(first, contact_first(coef, m, limit));
+                }
             }
         }
     }
