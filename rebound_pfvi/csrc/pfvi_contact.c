@@ -391,15 +391,37 @@ static double contact_first(const double coef[3][2*PFVI_STAGES_MAX+2], int m, do
     return 2.;
 }
 
-struct contact_order_arg {
-    const struct pfvi_contact_body* bodies;
-    int k;
-};
+// Heapsort of order[0 .. n) by the boxes' low x at interval k: in place
+// (glibc's qsort may allocate a buffer per call).
+static double low_x(const struct pfvi_contact_body* b, const size_t* order, size_t i, int k){
+    return b[order[i]].lo[k][0];
+}
 
-static int order_by_low_x(const void* a, const void* b, void* arg){
-    const struct contact_order_arg* const o = arg;
-    const double lp = o->bodies[*(const size_t*)a].lo[o->k][0], lq = o->bodies[*(const size_t*)b].lo[o->k][0];
-    return (lp < lq) ? -1 : (lp > lq) ? 1 : 0;
+static void sift_down(const struct pfvi_contact_body* b, size_t* order, size_t root, size_t n, int k){
+    for (;;){
+        size_t child = 2*root + 1;
+        if (child >= n){
+            return;
+        }
+        if (child + 1 < n && low_x(b, order, child, k) < low_x(b, order, child + 1, k)){
+            child++;
+        }
+        if (!(low_x(b, order, root, k) < low_x(b, order, child, k))){
+            return;
+        }
+        const size_t tmp = order[root]; order[root] = order[child]; order[child] = tmp;
+        root = child;
+    }
+}
+
+static void order_by_low_x(const struct pfvi_contact_body* b, size_t* order, size_t n, int k){
+    for (size_t i=n/2; i-- > 0;){
+        sift_down(b, order, i, n, k);
+    }
+    for (size_t end=n; end-- > 1;){
+        const size_t tmp = order[0]; order[0] = order[end]; order[end] = tmp;
+        sift_down(b, order, 0, end, k);
+    }
 }
 
 static int boxes_overlap(const struct pfvi_contact_body* p, const struct pfvi_contact_body* q, int k){
@@ -423,8 +445,7 @@ static double contact_search(const struct reb_simulation* r, struct pfvi_state* 
         for (size_t i=0; i<N; i++){
             order[i] = i;
         }
-        struct contact_order_arg arg = {b, k};
-        qsort_r(order, N, sizeof(*order), order_by_low_x, &arg);
+        order_by_low_x(b, order, N, k);
         for (size_t oi=0; oi<N; oi++){
             const size_t i = order[oi];
             for (size_t oj=oi+1; oj<N; oj++){
