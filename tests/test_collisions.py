@@ -187,3 +187,46 @@ def test_an_archive_written_after_a_merge_restarts_bit_identically(tmp_path):
     assert loaded.t == sim.t
     for a, b in zip(sim.particles, loaded.particles):
         assert (a.x, a.y, a.z, a.vx, a.vy, a.vz, a.m) == (b.x, b.y, b.z, b.vx, b.vy, b.vz, b.m)
+
+
+def test_a_step_refused_during_its_contact_retake_leaves_everything_as_it_was():
+    # Find the step that is retaken at the contact, and the force evaluations it makes.
+    calls = [0]
+
+    def count(simp):
+        calls[0] += 1
+
+    sim = two_planets("merge")
+    sim.additional_forces = count
+    steps_before, calls_before = 0, 0
+    while sim.integrator.n_contact_steps == 0:
+        steps_before, calls_before = sim.integrator.n_steps, calls[0]
+        sim.steps(1)
+    calls_in_step = calls[0] - calls_before
+    assert calls_in_step > 4
+
+    def state(s):
+        return (s.t, s.N, [(p.x, p.y, p.z, p.vx, p.vy, p.vz, p.m) for p in s.particles])
+
+    reference = two_planets("merge")
+    reference.additional_forces = lambda simp: None
+    for _ in range(steps_before):
+        reference.steps(1)
+    # The same run, with particle 2 edited at the second-last evaluation of that
+    # step: inside the retaken step (it comes last), which is then refused.
+    edited = two_planets("merge")
+    calls[0] = 0
+
+    def edit(simp):
+        calls[0] += 1
+        if calls[0] == calls_before + calls_in_step - 1:
+            simp.contents.particles[2].vx *= 1.5
+
+    edited.additional_forces = edit
+    for _ in range(steps_before):
+        edited.steps(1)
+    assert state(edited) == state(reference)
+    with pytest.raises(RuntimeError, match=r"changed particle 2's vx during the step"):
+        edited.steps(1)
+    assert state(edited) == state(reference)
+    assert edited.integrator.n_contact_steps == 0
