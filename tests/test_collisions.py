@@ -230,3 +230,18 @@ def test_a_step_refused_during_its_contact_retake_leaves_everything_as_it_was():
         edited.steps(1)
     assert state(edited) == state(reference)
     assert edited.integrator.n_contact_steps == 0
+
+
+@pytest.mark.parametrize("options", [{}, {"step_control": "seed"}, {"step_control": "reversible"}, {"stages": 2},
+                                     {"stages": 4, "fitting": "phase"}, {"stages": 6}])
+def test_every_step_control_and_scheme_ends_a_step_at_the_contact(options):
+    sim = two_planets("halt")
+    for name, value in options.items():
+        setattr(sim.integrator, name, value)
+    with pytest.raises(rebound.Collision):
+        sim.integrate(10.0)
+    ps = sim.particles
+    assert 0.02 * (1 - 1e-6) < math.dist(ps[1].xyz, ps[2].xyz) < 0.02
+    # Measured 1.55944693807 (defaults) ... 1.55944694339 (s = 2).
+    assert sim.t == pytest.approx(1.5594469381, abs=1e-7)
+    assert sim.integrator.n_contact_steps >= 1
