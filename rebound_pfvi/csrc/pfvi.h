@@ -265,6 +265,30 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // (relative): the Newton rounds take the predictor's error quadratically.
 #define PFVI_PREDICTOR_KEPLER_TOLERANCE 1e-12
 
+// Contacts inside a step (pfvi_contact.c, docs/collisions.md): with
+// collisions on and a radius set, or sim.exit_min_distance set, each step
+// taken is searched for the first time a pair's separation falls below the
+// sum of their radii or exit_min_distance, along the polynomial of degree
+// 2s through the step's positions and accelerations at its s nodes (the mean
+// of those through the velocity at either end), and the step is retaken to
+// end there.
+// Samples of that polynomial per candidate pair and step (between samples, a
+// dip is found by refining each sampled minimum):
+#define PFVI_CONTACT_SAMPLES 64
+// The retaken step ends where the path is this far inside the limit
+// (relative to the limit; at most half the dip's depth), so that REBOUND's
+// check at the step's end sees the overlap, still approaching:
+#define PFVI_CONTACT_DEPTH 1e-9
+// A body's path over a step lies within its nodes' spread plus this many
+// times |a|_max (h dc_max)^2/8 (the chord's sag between nodes) of the
+// midpoint of its ends: the bound that selects candidate pairs.
+#define PFVI_CONTACT_BOUND_SAFETY 4.
+// After this many consecutive steps retaken at a contact their end did not
+// reach (the path's contact and the step's disagree: a separation within the
+// step's error of the limit), the steps are kept as taken until no contact is
+// predicted (n_contact_kept).
+#define PFVI_CONTACT_RETAKES 4
+
 
 /* ---------------------------------------------------- quadrature (lobatto) */
 
@@ -617,6 +641,8 @@ struct pfvi_statistics {
     uint64_t n_solve_recovered;    // steps whose stage solve refreshed or dropped its Newton Jacobians
     uint64_t n_solve_halved;       // trial steps halved because their stage solve failed
     uint64_t n_outputs;            // output steps (pfvi_output.c): states shown at a requested time
+    uint64_t n_contact_steps;      // steps retaken to end at a contact the step's path showed
+    uint64_t n_contact_kept;       // steps kept past a predicted contact (PFVI_CONTACT_RETAKES)
 };
 
 // What a trial step found, committed only if the step is taken.
@@ -915,6 +941,16 @@ struct pfvi_state {
     size_t* origin;
     size_t origin_N;
     size_t origin_allocated;
+    // Contacts inside a step (pfvi_contact.c): consecutive steps retaken at
+    // a contact (saved), the inverse of the path polynomial's conditions for
+    // contact_s stages (0: not computed), and scratch grown only with N.
+    int contact_chain;
+    int contact_s;
+    double contact_inverse[2*PFVI_STAGES_MAX+2][2*PFVI_STAGES_MAX+2];
+    size_t contact_allocated;
+    struct pfvi_contact_body* contact_bodies;
+    size_t* contact_order;
+    struct pfvi_compensation* contact_compensation;
 };
 
 enum { PFVI_STEP_IDLE = 0, PFVI_STEP_RUNNING = 1, PFVI_STEP_TRACKING = 2, PFVI_STEP_UNTRACKED = 3 };
@@ -1147,6 +1183,24 @@ PFVI_INTERNAL int pfvi_force_model_kept(const struct reb_simulation* r, const st
 // pfvi_control.c: takes one step with the controller of options.step_control;
 // returns the h taken, or 0 (rolled back, fault recorded) if none could be.
 PFVI_INTERNAL double pfvi_controlled_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0);
+
+/* -------------------------------------------------------------- contacts */
+
+// pfvi_contact.c: whether a step must be searched for contacts (collisions
+// on with a radius set, or exit_min_distance set; O(N) only with collisions on).
+PFVI_INTERNAL int pfvi_contact_enabled(const struct reb_simulation* r);
+// Takes one step with `take` (the fixed or controlled step) and, if the
+// step's path shows a contact before its end, retakes it to end there
+// (rolled back, the controller as before the step, the step capped by
+// sim.dt). Returns the h taken, 0 if none (fault recorded).
+struct pfvi_contact_body {
+    double lo[PFVI_STAGES_MAX-1][3];  // the box of its path between nodes k and k + 1, with
+    double hi[PFVI_STAGES_MAX-1][3];  // its sag, its radius and half exit_min_distance
+    double sag;      // how far its path may leave the chords between its nodes
+};
+PFVI_INTERNAL double pfvi_contact_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
+        double (*take)(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0));
+PFVI_INTERNAL void pfvi_contact_free(struct pfvi_state* st);
 
 /* ------------------------------------------------------------------ glue */
 

@@ -292,6 +292,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_INT, "predictor_stages", offsetof(struct pfvi_state, predictor_stages), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_h", offsetof(struct pfvi_state, predictor_h), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_t", offsetof(struct pfvi_state, predictor_t), 0, 0, 0 },
+    { "", REB_INT, "contact_chain", offsetof(struct pfvi_state, contact_chain), 0, 0, 0 },
     PFVI_STATISTIC("steps taken by this integrator.", REB_UINT64, n_steps),
     PFVI_STATISTIC("particle-steps in which u = omega*dt exceeded u_max and was limited, "
         "or omega exceeded " PFVI_STR(PFVI_OMEGA_MAX) " (omega^2 beyond the doubles) and the particle "
@@ -350,6 +351,19 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "that time, never committed (see step_control). Not counted in n_steps or n_attempts; their "
         "force evaluations are in n_force_evaluations.",
         REB_UINT64, n_outputs),
+    PFVI_STATISTIC("steps retaken to end at a contact inside them: with collisions on (sim.collision not "
+        "'none') and a radius set, or sim.exit_min_distance set, each step taken is searched for the first "
+        "time two bodies come closer than the sum of their radii or exit_min_distance, along the "
+        "polynomial through its stages (positions and accelerations at its nodes, velocities at its "
+        "ends; candidate pairs by a bound from each body's nodes); the step is retaken to end there, "
+        PFVI_STR(PFVI_CONTACT_DEPTH) " of the limit inside it (at most half the dip), so that REBOUND's "
+        "collision search and resolve and its Encounter see the contact at the step's end. Included in "
+        "n_rejected and n_asymmetric; the steps are not time-symmetric (rebound_pfvi's docs, collisions).",
+        REB_UINT64, n_contact_steps),
+    PFVI_STATISTIC("steps kept past a contact their path showed, because " PFVI_STR(PFVI_CONTACT_RETAKES)
+        " steps in a row had been retaken to end at a contact their end did not reach (a minimum "
+        "separation within the step's error of the limit); they are kept until no contact is "
+        "predicted.", REB_UINT64, n_contact_kept),
     PFVI_STATISTIC("smallest omega used in the last step (after limiting).",
         REB_DOUBLE, omega_min),
     PFVI_STATISTIC("largest omega used in the last step (after limiting).",
@@ -757,6 +771,11 @@ static double pfvi_fixed_step(struct reb_simulation* r, struct pfvi_state* st, s
     return h;
 }
 
+// One step: fixed (epsilon 0) or by the step control.
+static double pfvi_take(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
+    return (st->options.epsilon == 0.) ? pfvi_fixed_step(r, st, N, t0) : pfvi_controlled_step(r, st, N, t0);
+}
+
 static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
     if (!pfvi_options_valid(r, &st->settings)){
         return;
@@ -842,7 +861,11 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
         }
         return;
     }
-    int dense = eligible && (finishing || shown) && st->options.epsilon > 0. && st->density_sigma > 0.;
+    // (With a contact search (pfvi_contact.c) the steps end where REBOUND
+    // asks, as before outputs were shown: a contact inside a step that passed
+    // the output would otherwise be searched from a state the run never had.)
+    const int contact = pfvi_contact_enabled(r);
+    int dense = eligible && (finishing || shown) && st->options.epsilon > 0. && st->density_sigma > 0. && !contact;
     if (dense && finishing){
         // The last step went from output_last_t0 to t0 (its end unedited):
         // a time inside it is shown from here, with no step of the run.
@@ -883,8 +906,10 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
             dense = 0;
         }
     }
+    // With collisions and radii, or exit_min_distance: retaken to end at the
+    // first contact its path shows (pfvi_contact.c).
     st->output_uncapped = dense;
-    const double h = (st->options.epsilon == 0.) ? pfvi_fixed_step(r, st, N, t0) : pfvi_controlled_step(r, st, N, t0);
+    const double h = contact ? pfvi_contact_step(r, st, N, t0, pfvi_take) : pfvi_take(r, st, N, t0);
     st->output_uncapped = 0;
     if (h == 0.){
         pfvi_report(r, st);

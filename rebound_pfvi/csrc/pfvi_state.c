@@ -15,6 +15,7 @@
 #include "boundary.h"
 
 void pfvi_state_free(struct pfvi_state* st){
+    pfvi_contact_free(st);
     free(st->start);
     free(st->end);
     free(st->fit);
