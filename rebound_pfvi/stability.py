@@ -301,7 +301,7 @@ def _stiff_binary():
 COMPACT_PLANETS = ((0.091, 1.3e-5), (0.107, 2.7e-5), (0.155, 2.4e-5), (0.195, 2.5e-5), (0.25, 2.5e-5))
 
 
-def compact_planets():
+def compact_planets() -> rebound.Simulation:
     """Five planets of 13 to 27 Earth masses at 0.091 to 0.25 AU about a Sun
     (e = 0.02, inclinations 0 to 2 deg): a compact multi-planet system, whose
     step density has as many frequencies as planets."""
@@ -314,7 +314,7 @@ def compact_planets():
     return sim
 
 
-def compact_planets_period():
+def compact_planets_period() -> float:
     """The innermost planet's period: the orbits the compact system counts."""
     return _period(COMPACT_PLANETS[0][0], 1.0)
 
@@ -343,7 +343,7 @@ def _compact_planets_case():
 CENTAUR = dict(a=7.5, e=0.35, inc=math.radians(6.0), Omega=0.3, omega=1.1, M=0.5)
 
 
-def centaur(**elements: float):
+def centaur(**elements: float) -> rebound.Simulation:
     """The Sun, Jupiter, Saturn and a massless Centaur crossing both orbits
     (closest approaches: 0.22 AU to Jupiter, within its Hill radius, and
     0.6 AU to Saturn within 411 yr); `elements` replace CENTAUR's."""
