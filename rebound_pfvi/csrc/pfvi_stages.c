@@ -11,17 +11,16 @@
  * + delta q^k at t_k + c^k h, and then takes
  *     G h (v_k+1 - v_k) = sum_k w_k [beta_d^k qd^k + h^2 (b^k + bbar^k) a^k]
  * (p_k+1 = D2 Ld minus p_k = -D1 Ld). For given a^k the equations are linear
- * with a matrix L that depends only on u (factorised in pfvi_fitting.c), so
- * the solve is a fixed-point iteration: solve the linear system (a round:
- * y = L^-1 g - (L^-1 P) F, F the forces at the stage points, P their weights),
- * evaluate forces at the new stage points through REBOUND, repeat. It stops
- * when the largest change of the unknowns is below round-off, zero, or no
- * longer decreasing (pfvi_iteration_verdict); it has converged if that change
- * is at round-off level, and is retried shorter or refused otherwise.
+ * with a matrix L that depends only on u (factorised in pfvi_fitting.c): a
+ * round solves the linear system for the forces F at the stage points (y =
+ * L^-1 g - (L^-1 P) F, P their weights), the forces come through REBOUND,
+ * and the solve layer (pfvi_solve.c) corrects the rounds by Newton's method
+ * and stops them; a solve that does not converge is retried shorter or
+ * refused.
  *
- * The first iterate uses the stage accelerations of the previous step,
- * extrapolated by their interpolating polynomial, when the previous step ended
- * where this one starts.
+ * The first iterate: a retried step's converged stages, or else (classical
+ * form) the two-body predictor of pfvi_solve.c; the fitted form's from the
+ * previous step's stage accelerations, extrapolated by their polynomial.
  */
 #include <float.h>
 #include <math.h>
