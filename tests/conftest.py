@@ -24,6 +24,13 @@ PYTHON_HEARTBEAT = _python_heartbeat_settable()
 needs_python_heartbeat = pytest.mark.skipif(
     not PYTHON_HEARTBEAT, reason=f"rebound {rebound.__version__} cannot set sim.heartbeat from Python (fixed in 5.2.2)")
 
+#: rebound 5.0.0's Python binding declares reb_collision's indices as c_int
+#: where the C struct has size_t, so a Python collision_resolve function reads
+#: p2 as 0 with any integrator (IAS15's too): REBOUND's limit, not pfvi's.
+needs_python_collision_resolve = pytest.mark.skipif(
+    ctypes.sizeof(dict(rebound.simulation.CollisionS._fields_)["p1"]) != ctypes.sizeof(ctypes.c_size_t),
+    reason=f"rebound {rebound.__version__}'s Python binding reads reb_collision.p2 wrongly")
+
 
 def particle_bytes(sim):
     """Every byte of every particle: the 'nothing lost' check compares these."""

@@ -15,6 +15,7 @@ import rebound_pfvi  # noqa: F401
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import collisions as bench  # noqa: E402
+from conftest import needs_python_collision_resolve  # noqa: E402
 
 R = bench.R_SUM
 
@@ -67,7 +68,7 @@ def two_planets(resolve, search="direct"):
 
 
 @pytest.mark.parametrize("search", ["direct", "line", "tree", "linetree"])
-@pytest.mark.parametrize("resolve", ["merge", "halt", "python"])
+@pytest.mark.parametrize("resolve", ["merge", "halt", pytest.param("python", marks=needs_python_collision_resolve)])
 def test_a_merge_inside_a_step_with_each_search_and_resolve(search, resolve):
     removed = []
 
@@ -113,6 +114,7 @@ def test_a_merge_inside_a_step_with_each_search_and_resolve(search, resolve):
         assert ias.t - t_hit < 2 * ias.dt_last_done
 
 
+@needs_python_collision_resolve
 def test_a_resolve_function_that_adds_a_particle_is_supported():
     def split(sim_pointer, collision):
         s = sim_pointer.contents

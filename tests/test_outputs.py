@@ -13,6 +13,7 @@ import pytest
 import rebound
 
 import rebound_pfvi  # noqa: F401  (registers "pfvi")
+from conftest import needs_python_heartbeat
 
 
 def kepler(e=0.6, f=0.0, **options):
@@ -176,6 +177,7 @@ def test_backward_outputs_leave_the_run_bit_identical():
     assert many.integrator.n_steps == one.integrator.n_steps
 
 
+@needs_python_heartbeat
 def test_heartbeat_sees_the_requested_times():
     sim = kepler()
     seen = []
