@@ -264,6 +264,11 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // ... stopped when its correction of the universal anomaly is below this
 // (relative): the Newton rounds take the predictor's error quadratically.
 #define PFVI_PREDICTOR_KEPLER_TOLERANCE 1e-12
+// A Halley correction of at most this (relative) is the last: Halley's next
+// would be of its cube, below PFVI_PREDICTOR_KEPLER_TOLERANCE, and the
+// orbit's functions are carried to the corrected anomaly by their Taylor
+// series (to its cube) instead of evaluated there again.
+#define PFVI_PREDICTOR_KEPLER_LAST 1e-4
 
 // Contacts inside a step (pfvi_contact.c, docs/collisions.md): with
 // collisions on and a radius set, or sim.exit_min_distance set, each step

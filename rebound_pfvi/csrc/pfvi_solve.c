@@ -53,7 +53,7 @@
 
 // LU factorisation with partial pivoting of the n x n matrix A (n <= 8) in
 // place, and the pivots' reciprocals; 0 if a pivot is zero or not finite.
-static int lu_factor(int n, double (*A)[LU_MAX], int* piv, double* inverse){
+static inline __attribute__((always_inline)) int lu_factor(int n, double (*A)[LU_MAX], int* piv, double* inverse){
     for (int k=0; k<n; k++){
         int p = k;
         for (int i=k+1; i<n; i++){
@@ -83,8 +83,8 @@ static int lu_factor(int n, double (*A)[LU_MAX], int* piv, double* inverse){
 // Solves with lu_factor's factors for `width` right-hand sides b[row][0 ..
 // width-1] in place. (The factors are of the rows as finally permuted:
 // every swap first, then L, then U.)
-static void lu_solve(int n, const double (*A)[LU_MAX], const int* piv, const double* inverse,
-        double (*b)[3], int width){
+static inline __attribute__((always_inline)) void lu_solve(int n, const double (*A)[LU_MAX], const int* piv,
+        const double* inverse, double (*b)[3], int width){
     for (int k=0; k<n; k++){
         for (int c=0; c<width; c++){
             const double t = b[piv[k]][c]; b[piv[k]][c] = b[k][c]; b[k][c] = t;
@@ -131,9 +131,11 @@ static int coupled_unknowns(const struct pfvi_solve_form* f){
 // and the capacitance C = I + [d_k' (X P^-1 S)[k][k'] (n_k . n_k')] (K x K).
 // (P alone is the stage matrix of an oscillator of frequency alpha^1/2, with
 // Lobatto IIIA-IIIB's eigenvalues it is regular for every real step.)
-static int newton_factor(const struct pfvi_solve_form* f, const double (*n)[3], const double* alpha,
-        struct pfvi_newton* u){
-    const int K = f->k_last, mc = coupled_unknowns(f);
+// (cs: 0, or the classical form's s as a constant, for loops the compiler unrolls)
+static inline __attribute__((always_inline)) int newton_factor_form(const struct pfvi_solve_form* f,
+        const double (*n)[3], const double* alpha, struct pfvi_newton* u, const int cs){
+    const int classical = (cs > 0);
+    const int K = classical ? cs - 2 : f->k_last, mc = classical ? cs - 2 : coupled_unknowns(f);
     u->mc = mc;
     double g[PFVI_STAGES_MAX];
     for (int k=1; k<=K; k++){
@@ -145,8 +147,12 @@ static int newton_factor(const struct pfvi_solve_form* f, const double (*n)[3], 
     for (int l=0; l<mc; l++){
         for (int j=0; j<mc; j++){
             double sum = (l == j) ? 1. : 0.;
-            for (int k=1; k<=K; k++){
-                sum += f->S[l][k]*g[k]*f->X[k][j];
+            if (classical){
+                sum += f->S[l][j+1]*g[j+1];   // (X the shift: X[k][j] = 1 at k = j + 1)
+            }else{
+                for (int k=1; k<=K; k++){
+                    sum += f->S[l][k]*g[k]*f->X[k][j];
+                }
             }
             u->P[l][j] = sum;
         }
@@ -173,14 +179,34 @@ static int newton_factor(const struct pfvi_solve_form* f, const double (*n)[3], 
     for (int k=1; k<=K; k++){
         for (int kk=1; kk<=K; kk++){
             double H = 0.;
-            for (int l=0; l<mc; l++){
-                H += f->X[k][l]*u->Q[l][kk];
+            if (classical){
+                H = u->Q[k-1][kk];
+            }else{
+                for (int l=0; l<mc; l++){
+                    H += f->X[k][l]*u->Q[l][kk];
+                }
             }
             const double nn = n[k][0]*n[kk][0] + n[k][1]*n[kk][1] + n[k][2]*n[kk][2];
             u->C[k-1][kk-1] = ((k == kk) ? 1. : 0.) + u->d[kk]*H*nn;
         }
     }
     return lu_factor(K, u->C, u->Cpiv, u->Cinv);
+}
+
+static int newton_factor(const struct pfvi_solve_form* f, const double (*n)[3], const double* alpha,
+        struct pfvi_newton* u){
+    if (f->classical && f->k_last == f->m - 1){
+        switch (f->m + 1){
+            case 3: return newton_factor_form(f, n, alpha, u, 3);
+            case 4: return newton_factor_form(f, n, alpha, u, 4);
+            case 5: return newton_factor_form(f, n, alpha, u, 5);
+            case 6: return newton_factor_form(f, n, alpha, u, 6);
+            case 7: return newton_factor_form(f, n, alpha, u, 7);
+            case 8: return newton_factor_form(f, n, alpha, u, 8);
+            default: break;
+        }
+    }
+    return newton_factor_form(f, n, alpha, u, 0);
 }
 
 // The partner's tidal tensor at stage k applied to dx: J dx = g dx + d n (n . dx).
@@ -308,9 +334,13 @@ static void newton_cross(const struct pfvi_solve_form* f, const struct pfvi_newt
         const struct pfvi_solve_form* fp, const double (*Dp)[3], double (*b)[3]){
     for (int k=1; k<=f->k_last; k++){
         double dx[3] = {0., 0., 0.}, J[3];
-        for (int l=0; l<fp->m; l++){
-            const double X = fp->X[k][l];
-            dx[0] += X*Dp[l][0]; dx[1] += X*Dp[l][1]; dx[2] += X*Dp[l][2];
+        if (fp->classical){
+            dx[0] = Dp[k-1][0]; dx[1] = Dp[k-1][1]; dx[2] = Dp[k-1][2];
+        }else{
+            for (int l=0; l<fp->m; l++){
+                const double X = fp->X[k][l];
+                dx[0] += X*Dp[l][0]; dx[1] += X*Dp[l][1]; dx[2] += X*Dp[l][2];
+            }
         }
         tidal_apply(u, k, u->gc[k], dx, J);
         for (int l=0; l<f->m; l++){
@@ -594,12 +624,16 @@ double pfvi_solve_change(const double (*y)[3], const double (*yn)[3], const doub
         scale = (q > scale) ? q : scale;
         scale = (d > scale) ? d : scale;
     }
+    // (the largest difference, and their sum only to carry a NaN through)
+    double any = 0.;
     for (int j=0; j<s-1; j++){
         for (int c=0; c<3; c++){
             const double d = fabs(yn[j][c] - y[j][c]);
-            diff = (d > diff || d != d) ? d : diff;
+            diff = (d > diff) ? d : diff;
+            any += d;
         }
     }
+    diff = (any == any) ? diff : any;
     return (scale > 0.) ? diff/scale : diff;
 }
 
@@ -819,10 +853,9 @@ static int kepler_drift(const double r0[3], const double v0[3], struct kepler_or
     const double dt = t - o->t;
     double s = o->s + dt/o->r - 0.5*o->dr*dt*dt/(o->r*o->r);
     double c[4];
-    int converged = 0;
     for (int it=0; it<PFVI_PREDICTOR_KEPLER_ITERATIONS; it++){
         stumpff(o->beta*s*s, c);
-        const double G1 = s*c[1], G2 = s*s*c[2], G3 = s*s*s*c[3];
+        double G1 = s*c[1], G2 = s*s*c[2], G3 = s*s*s*c[3];
         const double F = o->r0n*G1 + o->eta*G2 + o->mu*G3 - t;
         const double dF = o->r0n*c[0] + o->eta*G1 + o->mu*G2;   // the radius at s
         const double ddF = o->eta*c[0] + (o->mu - o->beta*o->r0n)*G1;
@@ -830,22 +863,26 @@ static int kepler_drift(const double r0[3], const double v0[3], struct kepler_or
         if (!isfinite(ds)){
             return 0;
         }
-        if (fabs(ds) <= PFVI_PREDICTOR_KEPLER_TOLERANCE*fabs(s)){
-            // (f and g from the functions at s: ds changes them by less than the tolerance)
-            const double f = 1. - o->mu*G2/o->r0n, g = t - o->mu*G3;
-            for (int k=0; k<3; k++){
-                r[k] = f*r0[k] + g*v0[k];
-            }
-            o->s = s - ds;
-            o->t = t;
-            o->r = dF;
-            o->dr = ddF/dF;
-            converged = 1;
-            break;
+        if (fabs(ds) > PFVI_PREDICTOR_KEPLER_LAST*fabs(s)){
+            s -= ds;
+            continue;
         }
-        s -= ds;
+        // The last correction: G2 and G3 at s - ds by their series
+        // (G3' = G2, G2' = G1, G1' = c0, c0' = -beta G1).
+        const double ds2 = 0.5*ds*ds, ds3 = ds2*ds/3.;
+        G3 = G3 - G2*ds + G1*ds2 - c[0]*ds3;
+        G2 = G2 - G1*ds + c[0]*ds2 + o->beta*G1*ds3;
+        const double f = 1. - o->mu*G2/o->r0n, g = t - o->mu*G3;
+        for (int k=0; k<3; k++){
+            r[k] = f*r0[k] + g*v0[k];
+        }
+        o->s = s - ds;
+        o->t = t;
+        o->r = dF - ddF*ds;
+        o->dr = ddF/dF;
+        return 1;
     }
-    return converged;
+    return 0;
 }
 
 // The two-body pull of the relative position r about mu (softened).
@@ -858,37 +895,49 @@ static void kepler_pull(const double r[3], double mu, double softening2, double 
 // What the predictor integrates beside the two-body orbit: at each stage
 // j < s - 1 of this step, the acceleration a body (or a pair's relative
 // coordinate, or its barycentre) feels beyond the pair's pull, extrapolated
-// from the last step's stages (basis: their Lagrange basis at this step's
-// nodes; NULL: held at its start value), and its integral over the step,
-// out[k] = h^2 sum_j nu[k][j] w_j rest_j (the classical form's stage
-// formula, exact for the polynomial the rest follows).
-static void rest_integral(const struct pfvi_state* st, const double (*basis)[PFVI_STAGES_MAX], double h,
-        const double rest0[3], const double (*rest_old)[3], double (*out)[3]){
-    const struct pfvi_lobatto* const rule = &st->rule;
+// from the last step's stages (their Lagrange basis at this step's nodes),
+// or held at its start value without them; and its integral over the step
+// by the classical form's own stage formula, exact for the polynomial the
+// rest follows: out[k] = h^2 sum_j nu[k][j] w_j rest_j. Extrapolation and
+// integral are one matrix for all bodies of a step (rest_weights):
+//     out[k] = h^2 (start[k] rest_0 + sum_m last[k][m] rest_old_m).
+struct rest_weights {
+    int extrapolated;
+    double start[PFVI_STAGES_MAX];
+    double last[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
+};
+
+static void rest_weights_of(const struct pfvi_lobatto* rule, const double (*basis)[PFVI_STAGES_MAX],
+        struct rest_weights* rw){
     const int s = rule->s;
-    double rest[PFVI_STAGES_MAX][3];
-    for (int c=0; c<3; c++){
-        rest[0][c] = rest0[c];
-    }
-    for (int j=1; j<s-1; j++){
-        for (int c=0; c<3; c++){
-            double sum = rest0[c];
-            if (basis){
-                sum = 0.;
-                for (int m=0; m<s; m++){
-                    sum += basis[j][m]*rest_old[m][c];
-                }
+    rw->extrapolated = (basis != NULL);
+    for (int k=1; k<s; k++){
+        double start = rule->nu[k][0]*rule->w[0];
+        for (int j=1; !basis && j<s-1; j++){
+            start += rule->nu[k][j]*rule->w[j];
+        }
+        rw->start[k] = start;
+        for (int m=0; basis && m<s; m++){
+            double sum = 0.;
+            for (int j=1; j<s-1; j++){
+                sum += rule->nu[k][j]*rule->w[j]*basis[j][m];
             }
-            rest[j][c] = sum;
+            rw->last[k][m] = sum;
         }
     }
+}
+
+static void rest_integral(const struct pfvi_state* st, const struct rest_weights* rw, double h,
+        const double rest0[3], const double (*rest_old)[3], double (*out)[3]){
+    const int s = st->rule.s;
+    const double h2 = h*h;
     for (int k=1; k<s; k++){
         for (int c=0; c<3; c++){
-            double sum = 0.;
-            for (int j=0; j<s-1; j++){
-                sum += rule->nu[k][j]*rule->w[j]*rest[j][c];
+            double sum = rw->start[k]*rest0[c];
+            for (int m=0; rw->extrapolated && m<s; m++){
+                sum += rw->last[k][m]*rest_old[m][c];
             }
-            out[k][c] = h*h*sum;
+            out[k][c] = h2*sum;
         }
     }
 }
@@ -898,7 +947,7 @@ static void rest_integral(const struct pfvi_state* st, const double (*basis)[PFV
 // acceleration; a mutual pair's relative orbit about their barycentre; the
 // start's motion under its extrapolated acceleration without a partner.
 static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, size_t i, double h,
-        const double (*basis)[PFVI_STAGES_MAX]){
+        const struct rest_weights* rw){
     const int s = st->rule.s;
     const struct pfvi_newton* const u = &st->newton[i];
     if (u->kind == PFVI_NEWTON_MEMBER){
@@ -911,10 +960,10 @@ static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, 
     const size_t p = u->partner;
     double rest_old[PFVI_STAGES_MAX][3], drift[PFVI_STAGES_MAX][3];
     if (p == SIZE_MAX || !(field->G > 0.)){
-        if (basis){
+        if (rw->extrapolated){
             memcpy(rest_old, st->predictor_a[i], sizeof(rest_old));
         }
-        rest_integral(st, basis, h, ai, (const double (*)[3])rest_old, drift);
+        rest_integral(st, rw, h, ai, (const double (*)[3])rest_old, drift);
         for (int k=1; k<s; k++){
             const double t = st->rule.c[k]*h;
             for (int c=0; c<3; c++){
@@ -940,7 +989,7 @@ static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, 
     for (int c=0; c<3; c++){
         rest0[c] = (ai[c] - ac0[c]) - pull[c];
     }
-    if (basis){
+    if (rw->extrapolated){
         for (int m=0; m<s; m++){
             double xc[3], r[3], a[3];
             centre_point(&cr, (const double (*)[PFVI_STAGES_MAX][3])st->predictor_x, m, xc);
@@ -956,7 +1005,7 @@ static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, 
             }
         }
     }
-    rest_integral(st, basis, h, rest0, (const double (*)[3])rest_old, drift);
+    rest_integral(st, rw, h, rest0, (const double (*)[3])rest_old, drift);
     double cm_drift[PFVI_STAGES_MAX][3], cm0[3], cmv[3];
     if (pair){
         double cma0[3], cma_old[PFVI_STAGES_MAX][3];
@@ -964,11 +1013,11 @@ static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, 
             cm0[c] = (pi->m*q0[c] + mp*xc0[c])/M;
             cmv[c] = (pi->m*v0[c] + mp*vc0[c])/M;
             cma0[c] = (pi->m*ai[c] + mp*ac0[c])/M;
-            for (int m=0; basis && m<s; m++){
+            for (int m=0; rw->extrapolated && m<s; m++){
                 cma_old[m][c] = (pi->m*st->predictor_a[i][m][c] + mp*st->predictor_a[p][m][c])/M;
             }
         }
-        rest_integral(st, basis, h, cma0, (const double (*)[3])cma_old, cm_drift);
+        rest_integral(st, rw, h, cma0, (const double (*)[3])cma_old, cm_drift);
     }
     const int drawn = centre_first(st, &cr, i);
     struct kepler_orbit_uv orbit;
@@ -1016,7 +1065,9 @@ void pfvi_solve_predict(struct pfvi_state* st, size_t N, const struct pfvi_field
             pfvi_lagrange_at(&st->rule, 1. + rho*st->rule.c[j], basis[j]);
         }
     }
+    struct rest_weights rw;
+    rest_weights_of(&st->rule, extrapolate ? (const double (*)[PFVI_STAGES_MAX])basis : NULL, &rw);
     for (size_t o=0; o<N; o++){
-        predict_body(st, field, st->newton_order[o], h, extrapolate ? (const double (*)[PFVI_STAGES_MAX])basis : NULL);
+        predict_body(st, field, st->newton_order[o], h, &rw);
     }
 }
