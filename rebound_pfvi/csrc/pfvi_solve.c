@@ -806,9 +806,12 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
 // Stumpff's functions c0 .. c3 of x = beta s^2 (beta = 2 mu/r - v^2).
 static void stumpff(double x, double c[4]){
     if (fabs(x) < 0.1){
-        // Series to x^6: below 1e-16 relative for |x| < 0.1.
-        c[3] = (1. - x/20.*(1. - x/42.*(1. - x/72.*(1. - x/110.*(1. - x/156.*(1. - x/210.))))))/6.;
-        c[2] = (1. - x/12.*(1. - x/30.*(1. - x/56.*(1. - x/90.*(1. - x/132.*(1. - x/182.))))))/2.;
+        // Series to x^6: below 1e-16 relative for |x| < 0.1 (Horner in x,
+        // the coefficients (-1)^k/(2k + 3)! and (-1)^k/(2k + 2)!).
+        c[3] = 1./6. + x*(-1./120. + x*(1./5040. + x*(-1./362880. + x*(1./39916800.
+            + x*(-1./6227020800. + x*(1./1307674368000.))))));
+        c[2] = 1./2. + x*(-1./24. + x*(1./720. + x*(-1./40320. + x*(1./3628800.
+            + x*(-1./479001600. + x*(1./87178291200.))))));
         c[1] = 1. - x*c[3];
         c[0] = 1. - x*c[2];
         return;
@@ -917,13 +920,17 @@ static void rest_weights_of(const struct pfvi_lobatto* rule, const double (*basi
             start += rule->nu[k][j]*rule->w[j];
         }
         rw->start[k] = start;
-        for (int m=0; basis && m<s; m++){
-            double sum = 0.;
-            for (int j=1; j<s-1; j++){
-                sum += rule->nu[k][j]*rule->w[j]*basis[j][m];
-            }
-            rw->last[k][m] = sum;
+        if (!basis){
+            continue;
         }
+        double last[PFVI_STAGES_MAX] = {0.};
+        for (int j=1; j<s-1; j++){
+            const double nuw = rule->nu[k][j]*rule->w[j];
+            for (int m=0; m<PFVI_STAGES_MAX; m++){
+                last[m] += nuw*basis[j][m];
+            }
+        }
+        memcpy(rw->last[k], last, sizeof(last));
     }
 }
 
@@ -1058,7 +1065,7 @@ static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, 
 
 void pfvi_solve_predict(struct pfvi_state* st, size_t N, const struct pfvi_field* field, double h, int extrapolate){
     // The last step's stages, in units of its length, at this step's nodes.
-    double basis[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
+    double basis[PFVI_STAGES_MAX][PFVI_STAGES_MAX] = {{0.}};   // (rows zero beyond s: rest_weights_of reads full rows)
     if (extrapolate){
         const double rho = h/st->predictor_h;
         for (int j=0; j<st->rule.s; j++){
