@@ -5,7 +5,7 @@ fixed steps; and CPU time per step against another build of rebound_pfvi.
 
     python -P benchmarks/solve.py [--orbits 300] [--baseline "ENV=... python3"] [--output docs/solve-tables.md]
 
---baseline runs the timing table's runs also with another build (a shell
+--baseline runs the timing and round-off floor tables also with another build (a shell
 command prefix that starts its interpreter, e.g. PYTHONPATH and
 LD_LIBRARY_PATH pointing at a checkout of an older commit built in place),
 interleaved with this one's, each in a fresh process, best of --repeats.
@@ -134,6 +134,11 @@ sim.add(m=1.0)
 if kind == "N=2":
     sim.add(m=1e-3, a=1.0, e=0.5)
     span = 300 * 2 * math.pi
+elif kind == "test particle":
+    sim.add(m=0.0, a=1.0, e=0.95)
+    sim.integrator = "pfvi"
+    sim.integrator.epsilon = 1e-12
+    span = 100 * 2 * math.pi
 elif kind == "N=3":
     sim.add(m=1e-3, a=1.0, e=0.3)
     sim.add(m=3e-4, a=1.9, e=0.2, f=2.0)
@@ -144,17 +149,75 @@ else:
         sim.add(m=1e-6, a=1.0 + 0.05 * k, e=0.05, inc=0.01 * (k % 7), f=2.1 * k)
     span = 2000 * 2 * math.pi / planets
 sim.move_to_com()
-sim.integrator = "pfvi"
+if kind != "test particle":
+    sim.integrator = "pfvi"
 t = time.process_time()
 sim.integrate(span)
 t = time.process_time() - t
 print(t / sim.integrator.n_steps * 1e9, sim.integrator.n_steps, float(sim.integrator.iterations_mean))
 """
 
+# The round-off floor: a test particle on Kepler e about a unit mass at
+# epsilon eps from `phases` starting phases, its position after `orbits`
+# orbits against the exact two-body motion (the mean anomaly advanced by n t).
+FLOOR = r"""
+import math, statistics, sys, rebound, rebound_pfvi
+e, eps, phases, orbits = float(sys.argv[1]), float(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4])
+errors, rounds = [], []
+for k in range(phases):
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=0.0, a=1.0, e=e, f=2 * math.pi * k / phases)
+    sim.integrator = "pfvi"
+    sim.integrator.epsilon = eps
+    o = sim.particles[1].orbit(primary=sim.particles[0])
+    sim.integrate(orbits * o.P)
+    exact = rebound.Simulation()
+    exact.add(m=1.0)
+    exact.add(m=0.0, a=1.0, e=e, M=(o.M + o.n * sim.t) % (2 * math.pi))
+    errors.append(math.dist(sim.particles[1].xyz, exact.particles[1].xyz))
+    rounds.append(float(sim.integrator.iterations_mean))
+print(statistics.median(errors), max(errors), min(errors), statistics.mean(rounds))
+"""
+
+
+def floor_rows(baseline, phases=8, orbits=100):
+    rows = []
+    for e in (0.5, 0.95):
+        for eps in (1e-12, 1e-14):
+            cells = {}
+            for label, prefix in (("this build", [sys.executable]), ("baseline", shlex.split(baseline))):
+                out = subprocess.run(["env"] + prefix + ["-P", "-c", FLOOR, str(e), str(eps), str(phases), str(orbits)],
+                                     capture_output=True, text=True, check=True).stdout.split()
+                cells[label] = [float(x) for x in out]
+            rows.append((e, eps, cells))
+    return rows
+
+
+def last_bit_scatter(runs=10):
+    """The retrograde crosser at the defaults from initial conditions `runs`
+    ulps apart (particle 2's x times 1 + k 2^-48): its close encounters make
+    the step sequence and the error depend on the last bits. Errors: the
+    largest position difference from IAS15 at epsilon 1e-11."""
+    scene = scenes.make("retrograde")
+    ref = scene.build()
+    ref.integrator = "ias15"
+    ref.integrator.epsilon = 1e-11
+    ref.integrate(scene.t_end, exact_finish_time=1)
+    rows = []
+    for k in range(runs):
+        sim = scene.build()
+        sim.integrator = "pfvi"
+        sim.particles[2].x *= 1 + k * 2.0**-48
+        sim.integrate(scene.t_end, exact_finish_time=1)
+        error = max(math.dist(a.xyz, b.xyz) for a, b in zip(sim.particles, ref.particles))
+        rows.append((k, int(sim.integrator.n_steps), float(sim.integrator.iterations_mean), error))
+    return rows
+
 
 def timing_rows(baseline, repeats):
     rows = []
-    for kind in ("N=2", "N=3", "N=11", "N=101"):
+    for kind in ("N=2", "test particle", "N=3", "N=11", "N=101"):
         best = {"this build": math.inf, "baseline": math.inf}
         info = {}
         for _ in range(repeats):
@@ -173,7 +236,7 @@ def main():
     parser.add_argument("--orbits", type=float, default=300.0)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--baseline", default=None)
-    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--repeats", type=int, default=15)
     parser.add_argument("--output", default=None)
     args = parser.parse_args()
     started = time.time()
@@ -204,12 +267,25 @@ def main():
               "| e | kappa | s = 4 | s = 6 | s = 8 |", "|---|---|---|---|---|"]
     for e, kappa, cells in kappa_rows():
         lines.append(f"| {e} | {kappa} | " + " | ".join(cells) + " |")
+    lines += ["", "### 5. Last-bit sensitivity: the retrograde crosser at the defaults, particle 2's x times "
+              "1 + k 2^-48; error: largest position difference from IAS15 at epsilon 1e-11", "",
+              "| k | steps | rounds per step | error (AU) |", "|---|---|---|---|"]
+    for k, steps, rounds, error in last_bit_scatter():
+        lines.append(f"| {k} | {steps} | {rounds:.2f} | {error:.2g} |")
     if args.baseline:
-        lines += ["", f"### 5. CPU time per step (best of {args.repeats}, interleaved, each run a fresh process)", "",
-                  "| system (N = 11, 101: a star and 10, 100 planets of 1e-6) | this build: ns/step | rounds | baseline: ns/step | rounds | ratio |", "|---|---|---|---|---|---|"]
+        lines += ["", f"### 6. CPU time per step (best of {args.repeats}, interleaved, each run a fresh process)", "",
+                  "| system (N = 11, 101: a star and 10, 100 planets of 1e-6; the test particle: e = 0.95 at epsilon 1e-12) | this build: ns/step | rounds | baseline: ns/step | rounds | ratio |", "|---|---|---|---|---|---|"]
         for kind, best, info in timing_rows(args.baseline, args.repeats):
             lines.append(f"| {kind} | {best['this build']:.0f} | {info['this build'][1]:.2f} | {best['baseline']:.0f} "
                          f"| {info['baseline'][1]:.2f} | {best['this build'] / best['baseline']:.2f} |")
+    if args.baseline:
+        lines += ["", "### 7. The round-off floor: a test particle about a unit mass, 100 orbits, eight starting "
+                  "phases; position error against the exact two-body motion (median, max, min over the phases)", "",
+                  "| e | epsilon | this build | rounds | baseline | rounds |", "|---|---|---|---|---|---|"]
+        for e, eps, cells in floor_rows(args.baseline):
+            a, b = cells["this build"], cells["baseline"]
+            lines.append(f"| {e} | {eps:g} | {a[0]:.2g}, {a[1]:.2g}, {a[2]:.2g} | {a[3]:.2f} "
+                         f"| {b[0]:.2g}, {b[1]:.2g}, {b[2]:.2g} | {b[3]:.2f} |")
     lines += ["", f"(`python -P benchmarks/solve.py --orbits {args.orbits:g}` took {time.time() - started:.0f} s "
               f"on {args.workers} workers.)", ""]
     text = "\n".join(lines)
