@@ -235,6 +235,22 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // time-symmetric spring on the mismatch was unstable (docs/roundoff.md).
 #define PFVI_TRACK_MISMATCH_WEIGHT (1./32.)
 #define PFVI_TRACK_MISMATCH_MAX 0.1
+// The steady track (pfvi_control.c, docs/roundoff.md): with three or more
+// bodies, where the density at the ends of STEADY_WINDOW intervals in a row
+// stayed within a factor 1 + STEADY_BAND, rho is held at the largest of them
+// (the shortest interval the density asked for) and the steps are constant:
+// the classical step is symplectic, and the energy of a planetary system
+// stays bounded, which the varying steps of the track did not give (a
+// time-symmetric track is not symplectic: over 1e5 Jupiter orbits the outer
+// solar system's energy error grew as t^0.4 ... t^1.45 with no asymmetric
+// step; constant steps of the same mean length kept it within 0.9 of its
+// first tenth). The hold ends where lambda sigma at an interval's end leaves
+// [rho/(1 + STEADY_BAND), rho (1 + STEADY_EXCESS)] (a step up to 2% longer
+// than the density asks: at most 1.02^(2s - 2) = 1.3 times its error).
+#define PFVI_STEADY_WINDOW 64
+#define PFVI_STEADY_BAND 0.25
+#define PFVI_STEADY_EXCESS 0.02
+#define PFVI_STEADY_BODIES 3
 // Outputs (pfvi_output.c): a requested time within OUTPUT_NEAR of the run's
 // state, relative to the time the run has spanned (REBOUND's own tolerance
 // for finishing on time, 1e-12 of t), is that state's: shown as it is,
@@ -738,6 +754,15 @@ struct pfvi_written {
 };
 #define PFVI_WRITTEN_FIELDS {"x", "y", "z", "vx", "vy", "vz", "m"}
 
+// The steady track's state (struct pfvi_state's steady; PFVI_STEADY_WINDOW).
+struct pfvi_steady {
+    int hold;
+    int n;
+    double lo, hi;
+    double entry_t, entry_sign, entry_before, entry_held;
+    double exit_t, exit_sign, exit_held, exit_after;
+};
+
 // Integrator state: settings, statistics and the controller's state are
 // REBOUND fields (saved in archives); the scratch grows only with N.
 struct pfvi_state {
@@ -770,6 +795,11 @@ struct pfvi_state {
     double track_mismatch;  // the average mismatch of rho and lambda sigma (PFVI_TRACK_MISMATCH_WEIGHT)
     double track_seen_lo;   // the time the average has seen: intervals a reversal retraces
     double track_seen_hi;   // within it are not averaged again (pfvi_control.c)
+    // The steady track (PFVI_STEADY_WINDOW): held or not, the window so far
+    // (its intervals and their end densities' range), and the last time the
+    // hold began and ended (the direction, 0 for none, and rho on either
+    // side), so that a reversal ends or resumes it where the way out did.
+    struct pfvi_steady steady;
     // What the symmetric track's time lost to rounding: the state is at
     // r->t + t_compensation (0 if r->t is not t_compensated, the t it was
     // kept for), so that a step capped to finish on time lands there.

@@ -348,7 +348,7 @@ static struct track_position symmetric_position(const struct pfvi_state* st, dou
         }
     }
     if (track){
-        t.rho = st->rho + sign*kappa*g;
+        t.rho = st->steady.hold ? st->rho : st->rho + sign*kappa*g;
     }
     if (!(t.rho > 0.) || !isfinite(t.rho)){
         const double scaled = st->density_scale*sigma;
@@ -382,6 +382,83 @@ static int symmetric_interval_unseen(struct pfvi_state* st, double t_end, double
         return 1;
     }
     return 0;
+}
+
+static void steady_forget(struct pfvi_state* st){
+    st->steady.hold = 0;
+    st->steady.n = 0;
+    st->steady.entry_sign = st->steady.exit_sign = 0.;
+}
+
+// Whether an interval of length `length` ended at t, the time of a recorded
+// hold's start or end (the grid a retrace lands on carries t's rounding).
+static int steady_at(double t, double t_event, double length){
+    return fabs(t - t_event) <= 1e-6*length;
+}
+
+// The steady track at the end of a full interval (length `length`, density
+// lambda sigma = d at its end, crossed in direction sign; unseen: beyond
+// what the track has seen). On seen intervals a reversal meets the holds the
+// way out began and ended and undoes them there (a second reversal redoes
+// them); on unseen ones the window starts and ends holds. Returns 1 where
+// rho jumped (a step that is not time-symmetric).
+static int steady_update(struct pfvi_state* st, size_t N, double t, double length, double sign, double d, int unseen){
+    if (!unseen){
+        if (st->steady.hold && st->steady.entry_sign == -sign && steady_at(t, st->steady.entry_t, length)){
+            st->steady.hold = 0;
+            st->rho = st->steady.entry_before;
+            st->rho_sign = st->steady.entry_sign;
+        }else if (!st->steady.hold && st->steady.entry_sign == sign && steady_at(t, st->steady.entry_t, length)){
+            st->steady.hold = 1;
+            st->rho = st->steady.entry_held;
+        }else if (!st->steady.hold && st->steady.exit_sign == -sign && steady_at(t, st->steady.exit_t, length)){
+            st->steady.hold = 1;
+            st->rho = st->steady.exit_held;
+            st->rho_sign = st->steady.exit_sign;
+        }else if (st->steady.hold && st->steady.exit_sign == sign && steady_at(t, st->steady.exit_t, length)){
+            st->steady.hold = 0;
+            st->rho = st->steady.exit_after;
+        }
+        return 0;
+    }
+    if (!(d > 0.) || N < PFVI_STEADY_BODIES){
+        st->steady.n = 0;
+        return 0;
+    }
+    if (st->steady.hold){
+        if (d > st->rho*(1. + PFVI_STEADY_EXCESS) || d*(1. + PFVI_STEADY_BAND) < st->rho){
+            st->steady.hold = 0;
+            st->steady.n = 0;
+            st->steady.exit_t = t;
+            st->steady.exit_sign = sign;
+            st->steady.exit_held = st->rho;
+            st->steady.exit_after = d;
+            st->rho = d;
+            return 1;
+        }
+        return 0;
+    }
+    st->steady.lo = (st->steady.n == 0) ? d : fmin(st->steady.lo, d);
+    st->steady.hi = (st->steady.n == 0) ? d : fmax(st->steady.hi, d);
+    st->steady.n++;
+    if (st->steady.hi > st->steady.lo*(1. + PFVI_STEADY_BAND)){
+        st->steady.n = 1;
+        st->steady.lo = st->steady.hi = d;
+        return 0;
+    }
+    if (st->steady.n < PFVI_STEADY_WINDOW){
+        return 0;
+    }
+    const double held = fmax(st->rho, st->steady.hi);
+    st->steady.hold = 1;
+    st->steady.n = 0;
+    st->steady.entry_t = t;
+    st->steady.entry_sign = sign;
+    st->steady.entry_before = st->rho;
+    st->steady.entry_held = held;
+    const int jumped = (held != st->rho);
+    st->rho = held;
+    return jumped;
 }
 
 // The symmetric step (Hairer & Soderlind 2005, SIAM J. Sci. Comput. 26,
@@ -457,6 +534,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     }
     symmetric_discard_implausible(st, sigma0);
     if (!symmetric_on_track(st, kappa)){
+        steady_forget(st);
         st->track_mismatch = 0.;  // a fresh track starts its average afresh
         st->track_seen_lo = st->track_seen_hi = t0;
     }
@@ -573,6 +651,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     const int full = (step == t.remaining);
     if (restart){
         st->rho = 0.;
+        steady_forget(st);
         st->track_mismatch = 0.;
         st->track_seen_lo = st->track_seen_hi = r->t;
     }else{
@@ -593,7 +672,11 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
             asymmetric = 1;
         }
         const int unseen = full && symmetric_interval_unseen(st, r->t, t.length, sign);
-        if (unseen && t.done == 0. && !shortened && sigma0 > 0. && sigma1 > 0.){
+        if (full && !shortened){
+            asymmetric |= steady_update(st, N, r->t, t.length, sign, lambda*sigma1, unseen && t.done == 0.);
+            st->track_done = kappa/st->rho;
+        }
+        if (!st->steady.hold && unseen && t.done == 0. && !shortened && sigma0 > 0. && sigma1 > 0.){
             // The interval's mismatch, averaged; a drift of the average is
             // taken out of rho (pfvi.h, PFVI_TRACK_MISMATCH_MAX).
             const double m = log(t.rho/(lambda*sqrt(sigma0)*sqrt(sigma1)));

@@ -209,7 +209,15 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "sim.steps(n) comes back to the start, and so does integrate(T) then integrate(0) (the track's "
       "drift average counts each interval once, so a reversal does not fire it anew; a requested time "
       "within " PFVI_STR(PFVI_OUTPUT_NEAR) " of the run's span from the state reached is taken as "
-      "reached). Outputs do not change the run: where REBOUND finishes on a requested time "
+      "reached). A steady density holds the track: with " PFVI_STR(PFVI_STEADY_BODIES) " or more bodies, "
+      "where the density at the ends of " PFVI_STR(PFVI_STEADY_WINDOW) " intervals in a row stayed within a "
+      "factor 1 + " PFVI_STR(PFVI_STEADY_BAND) " (a planetary system of low eccentricities), rho is held at "
+      "the largest of them and the steps are constant, so that the classical step's symplecticity keeps "
+      "the energy bounded (a varying track does not); the hold ends where the density at an interval's "
+      "end leaves [rho/(1 + " PFVI_STR(PFVI_STEADY_BAND) "), rho (1 + " PFVI_STR(PFVI_STEADY_EXCESS) ")]. "
+      "Its start and end are counted in n_asymmetric where rho jumps there, and a reversal undoes the "
+      "last start and end where the way out made them. "
+      "Outputs do not change the run: where REBOUND finishes on a requested time "
       "(integrate(t) with exact_finish_time = 1, its default) the step takes its whole interval and "
       "the simulation is given the state at t from an output step, one trial step from the step's "
       "end back to t, never committed (n_outputs); the run's own state is kept (saved in archives) "
@@ -266,6 +274,18 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "track_mismatch", offsetof(struct pfvi_state, track_mismatch), 0, 0, 0 },
     { "", REB_DOUBLE, "track_seen_lo", offsetof(struct pfvi_state, track_seen_lo), 0, 0, 0 },
     { "", REB_DOUBLE, "track_seen_hi", offsetof(struct pfvi_state, track_seen_hi), 0, 0, 0 },
+    { "", REB_INT, "steady_hold", offsetof(struct pfvi_state, steady.hold), 0, 0, 0 },
+    { "", REB_INT, "steady_n", offsetof(struct pfvi_state, steady.n), 0, 0, 0 },
+    { "", REB_DOUBLE, "steady_lo", offsetof(struct pfvi_state, steady.lo), 0, 0, 0 },
+    { "", REB_DOUBLE, "steady_hi", offsetof(struct pfvi_state, steady.hi), 0, 0, 0 },
+    { "", REB_DOUBLE, "steady_entry_t", offsetof(struct pfvi_state, steady.entry_t), 0, 0, 0 },
+    { "", REB_DOUBLE, "steady_entry_sign", offsetof(struct pfvi_state, steady.entry_sign), 0, 0, 0 },
+    { "", REB_DOUBLE, "steady_entry_before", offsetof(struct pfvi_state, steady.entry_before), 0, 0, 0 },
+    { "", REB_DOUBLE, "steady_entry_held", offsetof(struct pfvi_state, steady.entry_held), 0, 0, 0 },
+    { "", REB_DOUBLE, "steady_exit_t", offsetof(struct pfvi_state, steady.exit_t), 0, 0, 0 },
+    { "", REB_DOUBLE, "steady_exit_sign", offsetof(struct pfvi_state, steady.exit_sign), 0, 0, 0 },
+    { "", REB_DOUBLE, "steady_exit_held", offsetof(struct pfvi_state, steady.exit_held), 0, 0, 0 },
+    { "", REB_DOUBLE, "steady_exit_after", offsetof(struct pfvi_state, steady.exit_after), 0, 0, 0 },
     { "", REB_DOUBLE, "track_kappa", offsetof(struct pfvi_state, track_kappa), 0, 0, 0 },
     { "", REB_DOUBLE, "density_scale", offsetof(struct pfvi_state, density_scale), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_last_full", offsetof(struct pfvi_state, dt_last_full), 0, 0, 0 },
@@ -319,7 +339,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     PFVI_STATISTIC("trial steps, taken or not (the work done: n_attempts / n_steps per step).",
         REB_UINT64, n_attempts),
     PFVI_STATISTIC("steps taken that are not time-symmetric: 'symmetric' steps retaken shorter "
-        "(see step_control) or after which density_scale fell back, and 'reversible' "
+        "(see step_control), after which density_scale fell back, the track's drift correction acted, "
+        "or a steady hold began or ended with a jump of rho, and 'reversible' "
         "steps whose step equation was not solved in " PFVI_STR(PFVI_REVERSIBLE_MAX_TRIALS) " trial "
         "steps and that were taken at the largest step tried meeting epsilon.",
         REB_UINT64, n_asymmetric),

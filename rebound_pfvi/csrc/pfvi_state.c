@@ -470,6 +470,17 @@ void pfvi_discard_implausible(const struct reb_simulation* r, struct pfvi_state*
     if (!(fabs(st->track_mismatch) <= PFVI_TRACK_MISMATCH_MAX)){
         st->track_mismatch = 0.;
     }
+    // The steady track's hold and records (the track restarts without them).
+    const struct pfvi_steady* const sd = &st->steady;
+    const int steady_sane = (sd->hold == 0 || sd->hold == 1) && sd->n >= 0 && sd->n <= PFVI_STEADY_WINDOW
+        && isfinite(sd->lo + sd->hi + sd->entry_t + sd->entry_before + sd->entry_held + sd->exit_t + sd->exit_held
+            + sd->exit_after)
+        && (sd->entry_sign == 0. || sd->entry_sign == 1. || sd->entry_sign == -1.)
+        && (sd->exit_sign == 0. || sd->exit_sign == 1. || sd->exit_sign == -1.);
+    if (!steady_sane){
+        memset(&st->steady, 0, sizeof(st->steady));
+        st->rho = 0.;
+    }
     if (!(st->track_seen_lo <= st->track_seen_hi)){
         st->track_seen_lo = st->track_seen_hi = r->t;  // NaN or crossed: everything ahead is unseen
     }
