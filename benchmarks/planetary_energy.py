@@ -2,6 +2,7 @@
 
     python -P benchmarks/planetary_energy.py --orbits 1e4 --members 4 --output docs/planetary-energy-1e4.md
     python -P benchmarks/planetary_energy.py --orbits 1e6 --members 1 --scenes outer-solar-system
+    python -P benchmarks/planetary_energy.py --orbits 1e5 --members 4 --fixed-steps-per-orbit 6.89 --scenes outer-solar-system
 
 Scenes: the outer solar system (scenes.make("outer-solar-system"); orbits
 are Jupiter's) and a compact system of five planets of 13 to 27 Earth
@@ -46,11 +47,15 @@ def build(name):
     raise ValueError(f"scene {name!r}: one of {', '.join(SCENES)}")
 
 
-def member(name, orbits, k):
-    """One run: its energy errors at the samples and what pfvi counted."""
+def member(name, orbits, k, fixed=None):
+    """One run: its energy errors at the samples and what pfvi counted
+    (fixed: constant steps of period/fixed instead of the defaults)."""
     sim, period = build(name)
     sim.particles[1].x *= 1.0 + k * 2.0**-52
     sim.integrator = "pfvi"
+    if fixed:
+        sim.integrator.epsilon = 0.0
+        sim.dt = period / fixed
     E0 = sim.energy()
     errors = []
     tick = time.process_time()
@@ -92,12 +97,14 @@ def main(argv=None):
     parser.add_argument("--scenes", default=",".join(SCENES))
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--output", help="write the table (markdown) here")
+    parser.add_argument("--fixed-steps-per-orbit", type=float, default=None,
+                        help="constant steps (epsilon = 0) of this many per orbit instead of the defaults")
     args = parser.parse_args(argv)
     names = args.scenes.split(",")
-    jobs = [(n, args.orbits, k) for n in names for k in range(args.members)]
+    jobs = [(n, args.orbits, k, args.fixed_steps_per_orbit) for n in names for k in range(args.members)]
     with ProcessPoolExecutor(args.workers) as pool:
         results = list(pool.map(member, *zip(*jobs)))
-    rows = [summarise(n, args.orbits, [r for (m, _, _), r in zip(jobs, results) if m == n]) for n in names]
+    rows = [summarise(n, args.orbits, [r for (m, *_), r in zip(jobs, results) if m == n]) for n in names]
     text = table(rows)
     print(text)
     if args.output:
