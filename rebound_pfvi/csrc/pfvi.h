@@ -236,9 +236,12 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 #define PFVI_TRACK_MISMATCH_WEIGHT (1./32.)
 #define PFVI_TRACK_MISMATCH_MAX 0.1
 // The steady track (pfvi_control.c, docs/roundoff.md): with three or more
-// bodies, where the density at the ends of STEADY_WINDOW intervals in a row
-// stayed within a factor 1 + STEADY_BAND, rho is held at the largest of them
-// (the shortest interval the density asked for) and the steps are constant:
+// bodies, where the density at the ends of STEADY_WINDOW intervals in a row,
+// spanning at least 2 pi/sqrt(G (m_i + m_j)/r^3) of the loosest partner pair
+// seen (a full cycle of the slowest orbit: a comet's long quiet arc about
+// its aphelion is not steady), stayed within a factor 1 + STEADY_BAND, rho
+// is held as it is once it reaches the largest of them (no jump: the track
+// overshoots the density's peaks) and the steps are constant:
 // the classical step is symplectic, and the energy of a planetary system
 // stays bounded, which the varying steps of the track did not give (a
 // time-symmetric track is not symplectic: over 1e5 Jupiter orbits the outer
@@ -246,7 +249,9 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // step; constant steps of the same mean length kept it within 0.9 of its
 // first tenth). The hold ends where lambda sigma at an interval's end leaves
 // [rho/(1 + STEADY_BAND), rho (1 + STEADY_EXCESS)] (a step up to 2% longer
-// than the density asks: at most 1.02^(2s - 2) = 1.3 times its error).
+// than the density asks: at most 1.02^(2s - 2) = 1.3 times its error):
+// above, the track goes on from rho as it is (the density's rate takes it
+// up); below, rho is set to lambda sigma (a jump: n_asymmetric).
 #define PFVI_STEADY_WINDOW 64
 #define PFVI_STEADY_BAND 0.25
 #define PFVI_STEADY_EXCESS 0.02
@@ -759,6 +764,7 @@ struct pfvi_steady {
     int hold;
     int n;
     double lo, hi;
+    double t0, span;    // the window's start, and the slowest orbit's time scale seen in it
     double entry_t, entry_sign, entry_before, entry_held;
     double exit_t, exit_sign, exit_held, exit_after;
 };

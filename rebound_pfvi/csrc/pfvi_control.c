@@ -396,13 +396,25 @@ static int steady_at(double t, double t_event, double length){
     return fabs(t - t_event) <= 1e-6*length;
 }
 
+// The time scale 2 pi/sqrt(G (m_i + m_j)/r^3) of the loosest partner pair
+// (the slowest orbit a body makes about its partner), 0 without pairs.
+static double steady_slowest(const struct pfvi_state* st, size_t N, double G){
+    double least = INFINITY;
+    for (size_t i=0; i<N; i++){
+        const double k = st->partners[i].stiffness;
+        least = (st->partners[i].j != SIZE_MAX && k > 0. && k < least) ? k : least;
+    }
+    return (isfinite(least) && G > 0.) ? 2.*M_PI/sqrt(G*least) : 0.;
+}
+
 // The steady track at the end of a full interval (length `length`, density
 // lambda sigma = d at its end, crossed in direction sign; unseen: beyond
 // what the track has seen). On seen intervals a reversal meets the holds the
 // way out began and ended and undoes them there (a second reversal redoes
 // them); on unseen ones the window starts and ends holds. Returns 1 where
 // rho jumped (a step that is not time-symmetric).
-static int steady_update(struct pfvi_state* st, size_t N, double t, double length, double sign, double d, int unseen){
+static int steady_update(struct pfvi_state* st, size_t N, double G, double t, double length, double sign, double d,
+        int unseen){
     if (!unseen){
         if (st->steady.hold && st->steady.entry_sign == -sign && steady_at(t, st->steady.entry_t, length)){
             st->steady.hold = 0;
@@ -426,39 +438,50 @@ static int steady_update(struct pfvi_state* st, size_t N, double t, double lengt
         return 0;
     }
     if (st->steady.hold){
-        if (d > st->rho*(1. + PFVI_STEADY_EXCESS) || d*(1. + PFVI_STEADY_BAND) < st->rho){
+        const int above = d > st->rho*(1. + PFVI_STEADY_EXCESS);
+        if (above || d*(1. + PFVI_STEADY_BAND) < st->rho){
+            // Above: the track goes on from rho (the density's rate takes
+            // it up); far below, rho moves onto the density.
+            const double after = above ? st->rho : d;
             st->steady.hold = 0;
             st->steady.n = 0;
             st->steady.exit_t = t;
             st->steady.exit_sign = sign;
             st->steady.exit_held = st->rho;
-            st->steady.exit_after = d;
-            st->rho = d;
-            return 1;
+            st->steady.exit_after = after;
+            const int jumped = (after != st->rho);
+            st->rho = after;
+            return jumped;
         }
         return 0;
     }
+    const double slowest = steady_slowest(st, N, G);
+    if (st->steady.n == 0){
+        st->steady.t0 = t;
+        st->steady.span = 0.;
+    }
     st->steady.lo = (st->steady.n == 0) ? d : fmin(st->steady.lo, d);
     st->steady.hi = (st->steady.n == 0) ? d : fmax(st->steady.hi, d);
-    st->steady.n++;
-    if (st->steady.hi > st->steady.lo*(1. + PFVI_STEADY_BAND)){
+    st->steady.span = fmax(st->steady.span, slowest);
+    st->steady.n += (st->steady.n < PFVI_STEADY_WINDOW);
+    if (st->steady.hi > st->steady.lo*(1. + PFVI_STEADY_BAND) || !(slowest > 0.)){
         st->steady.n = 1;
+        st->steady.t0 = t;
+        st->steady.span = slowest;
         st->steady.lo = st->steady.hi = d;
         return 0;
     }
-    if (st->steady.n < PFVI_STEADY_WINDOW){
+    // A full window, over a cycle of its slowest orbit, and rho at its top.
+    if (st->steady.n < PFVI_STEADY_WINDOW || fabs(t - st->steady.t0) < st->steady.span || st->rho < st->steady.hi){
         return 0;
     }
-    const double held = fmax(st->rho, st->steady.hi);
     st->steady.hold = 1;
     st->steady.n = 0;
     st->steady.entry_t = t;
     st->steady.entry_sign = sign;
     st->steady.entry_before = st->rho;
-    st->steady.entry_held = held;
-    const int jumped = (held != st->rho);
-    st->rho = held;
-    return jumped;
+    st->steady.entry_held = st->rho;
+    return 0;
 }
 
 // The symmetric step (Hairer & Soderlind 2005, SIAM J. Sci. Comput. 26,
@@ -673,7 +696,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         }
         const int unseen = full && symmetric_interval_unseen(st, r->t, t.length, sign);
         if (full && !shortened){
-            asymmetric |= steady_update(st, N, r->t, t.length, sign, lambda*sigma1, unseen && t.done == 0.);
+            asymmetric |= steady_update(st, N, field.G, r->t, t.length, sign, lambda*sigma1, unseen && t.done == 0.);
             st->track_done = kappa/st->rho;
         }
         if (!st->steady.hold && unseen && t.done == 0. && !shortened && sigma0 > 0. && sigma1 > 0.){

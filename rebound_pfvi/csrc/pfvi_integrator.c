@@ -210,13 +210,14 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "drift average counts each interval once, so a reversal does not fire it anew; a requested time "
       "within " PFVI_STR(PFVI_OUTPUT_NEAR) " of the run's span from the state reached is taken as "
       "reached). A steady density holds the track: with " PFVI_STR(PFVI_STEADY_BODIES) " or more bodies, "
-      "where the density at the ends of " PFVI_STR(PFVI_STEADY_WINDOW) " intervals in a row stayed within a "
-      "factor 1 + " PFVI_STR(PFVI_STEADY_BAND) " (a planetary system of low eccentricities), rho is held at "
-      "the largest of them and the steps are constant, so that the classical step's symplecticity keeps "
-      "the energy bounded (a varying track does not); the hold ends where the density at an interval's "
-      "end leaves [rho/(1 + " PFVI_STR(PFVI_STEADY_BAND) "), rho (1 + " PFVI_STR(PFVI_STEADY_EXCESS) ")]. "
-      "Its start and end are counted in n_asymmetric where rho jumps there, and a reversal undoes the "
-      "last start and end where the way out made them. "
+      "where the density at the ends of at least " PFVI_STR(PFVI_STEADY_WINDOW) " intervals in a row, spanning "
+      "a cycle of the slowest orbit (2 pi/sqrt(G (m_i + m_j)/r^3) of the loosest partner pair), stayed "
+      "within a factor 1 + " PFVI_STR(PFVI_STEADY_BAND) " (a planetary system of low eccentricities), rho "
+      "is held once it reaches the largest of them and the steps are constant, so that the classical "
+      "step's symplecticity keeps the energy bounded (a varying track does not); the hold ends where the "
+      "density at an interval's end rises above rho (1 + " PFVI_STR(PFVI_STEADY_EXCESS) ") (the track goes "
+      "on from rho) or falls below rho/(1 + " PFVI_STR(PFVI_STEADY_BAND) ") (rho moves onto it: counted in "
+      "n_asymmetric). A reversal undoes the last start and end of a hold where the way out made them. "
       "Outputs do not change the run: where REBOUND finishes on a requested time "
       "(integrate(t) with exact_finish_time = 1, its default) the step takes its whole interval and "
       "the simulation is given the state at t from an output step, one trial step from the step's "
@@ -278,6 +279,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_INT, "steady_n", offsetof(struct pfvi_state, steady.n), 0, 0, 0 },
     { "", REB_DOUBLE, "steady_lo", offsetof(struct pfvi_state, steady.lo), 0, 0, 0 },
     { "", REB_DOUBLE, "steady_hi", offsetof(struct pfvi_state, steady.hi), 0, 0, 0 },
+    { "", REB_DOUBLE, "steady_t0", offsetof(struct pfvi_state, steady.t0), 0, 0, 0 },
+    { "", REB_DOUBLE, "steady_span", offsetof(struct pfvi_state, steady.span), 0, 0, 0 },
     { "", REB_DOUBLE, "steady_entry_t", offsetof(struct pfvi_state, steady.entry_t), 0, 0, 0 },
     { "", REB_DOUBLE, "steady_entry_sign", offsetof(struct pfvi_state, steady.entry_sign), 0, 0, 0 },
     { "", REB_DOUBLE, "steady_entry_before", offsetof(struct pfvi_state, steady.entry_before), 0, 0, 0 },
@@ -340,7 +343,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         REB_UINT64, n_attempts),
     PFVI_STATISTIC("steps taken that are not time-symmetric: 'symmetric' steps retaken shorter "
         "(see step_control), after which density_scale fell back, the track's drift correction acted, "
-        "or a steady hold began or ended with a jump of rho, and 'reversible' "
+        "or a steady hold ended with a jump of rho, and 'reversible' "
         "steps whose step equation was not solved in " PFVI_STR(PFVI_REVERSIBLE_MAX_TRIALS) " trial "
         "steps and that were taken at the largest step tried meeting epsilon.",
         REB_UINT64, n_asymmetric),
