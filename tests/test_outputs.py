@@ -7,6 +7,8 @@ scene: benchmarks/outputs.py (docs/step-control.md, "Outputs and reversal").
 """
 import math
 import random
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,6 +16,9 @@ import rebound
 
 import rebound_pfvi  # noqa: F401  (registers "pfvi")
 from conftest import needs_python_heartbeat
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+import outputs as outputs_bench  # noqa: E402
 
 
 def kepler(e=0.6, f=0.0, **options):
@@ -29,15 +34,8 @@ def kepler(e=0.6, f=0.0, **options):
 
 def encke(**options):
     """An Encke-like comet (a = 2.2 AU, e = 0.85) among Venus, Earth, Mars and
-    Jupiter, in AU, yr and Msun."""
-    sim = rebound.Simulation()
-    sim.units = ("AU", "yr", "Msun")
-    sim.add(m=1.0)
-    for m, a, e, M in ((2.45e-6, 0.723, 0.007, 1.0), (3.0e-6, 1.0, 0.017, 2.0), (3.2e-7, 1.524, 0.093, 3.0),
-                       (9.55e-4, 5.203, 0.048, 4.0)):
-        sim.add(m=m, a=a, e=e, M=M)
-    sim.add(m=0.0, a=2.2, e=0.85, inc=math.radians(12.0), omega=3.0, M=0.5)
-    sim.move_to_com()
+    Jupiter, in AU, yr and Msun: benchmarks/outputs.py's scene."""
+    sim = outputs_bench.Encke().build()
     sim.integrator = "pfvi"
     for name, value in options.items():
         setattr(sim.integrator, name, value)
@@ -192,12 +190,7 @@ def test_heartbeat_sees_the_requested_times():
 
 def test_variational_particles_and_megno_with_outputs():
     def build():
-        sim = rebound.Simulation()
-        sim.add(m=1)
-        sim.add(m=1e-3, a=1.0, e=0.4)
-        sim.add(m=1e-3, a=2.3, e=0.2, inc=0.1)
-        sim.move_to_com()
-        sim.integrator = "pfvi"
+        sim = kepler_planets()
         sim.init_megno(seed=1)
         return sim
     one = run(build, [20.0])
