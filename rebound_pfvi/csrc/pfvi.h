@@ -765,7 +765,7 @@ struct pfvi_steady {
     int n;
     double lo, hi;
     double t0, span;    // the window's start, and the slowest orbit's time scale seen in it
-    double entry_t, entry_sign, entry_before, entry_held;
+    double entry_t, entry_sign, entry_rho;   // (a hold begins without a jump: rho on both sides)
     double exit_t, exit_sign, exit_held, exit_after;
 };
 

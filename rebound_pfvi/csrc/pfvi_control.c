@@ -418,11 +418,11 @@ static int steady_update(struct pfvi_state* st, size_t N, double G, double t, do
     if (!unseen){
         if (st->steady.hold && st->steady.entry_sign == -sign && steady_at(t, st->steady.entry_t, length)){
             st->steady.hold = 0;
-            st->rho = st->steady.entry_before;
+            st->rho = st->steady.entry_rho;
             st->rho_sign = st->steady.entry_sign;
         }else if (!st->steady.hold && st->steady.entry_sign == sign && steady_at(t, st->steady.entry_t, length)){
             st->steady.hold = 1;
-            st->rho = st->steady.entry_held;
+            st->rho = st->steady.entry_rho;
         }else if (!st->steady.hold && st->steady.exit_sign == -sign && steady_at(t, st->steady.exit_t, length)){
             st->steady.hold = 1;
             st->rho = st->steady.exit_held;
@@ -479,8 +479,7 @@ static int steady_update(struct pfvi_state* st, size_t N, double G, double t, do
     st->steady.n = 0;
     st->steady.entry_t = t;
     st->steady.entry_sign = sign;
-    st->steady.entry_before = st->rho;
-    st->steady.entry_held = st->rho;
+    st->steady.entry_rho = st->rho;
     return 0;
 }
 

@@ -473,7 +473,7 @@ void pfvi_discard_implausible(const struct reb_simulation* r, struct pfvi_state*
     // The steady track's hold and records (the track restarts without them).
     const struct pfvi_steady* const sd = &st->steady;
     const int steady_sane = (sd->hold == 0 || sd->hold == 1) && sd->n >= 0 && sd->n <= PFVI_STEADY_WINDOW
-        && isfinite(sd->lo + sd->hi + sd->t0 + sd->span + sd->entry_t + sd->entry_before + sd->entry_held + sd->exit_t + sd->exit_held
+        && isfinite(sd->lo + sd->hi + sd->t0 + sd->span + sd->entry_t + sd->entry_rho + sd->exit_t + sd->exit_held
             + sd->exit_after)
         && (sd->entry_sign == 0. || sd->entry_sign == 1. || sd->entry_sign == -1.)
         && (sd->exit_sign == 0. || sd->exit_sign == 1. || sd->exit_sign == -1.);
