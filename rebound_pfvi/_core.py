@@ -77,6 +77,27 @@ def abi_mismatch(compiled: str, running: str, running_c: str,
             f"running rebound: {rebuild_command()}")
 
 
+def load_error(path: str, error: OSError) -> str:
+    """The error for a core that does not load. The core finds REBOUND's C
+    library through its RUNPATH only, the folder that holds rebound_pfvi
+    (relocatable, tests/test_archive_and_registration.py); a rebound installed
+    elsewhere (a venv made with --system-site-packages and the system's
+    rebound) is not found, and rebuilding would not help: say where each is
+    and put a rebound beside rebound_pfvi."""
+    here = os.path.dirname(os.path.dirname(os.path.abspath(path)))
+    site = os.path.dirname(os.path.dirname(os.path.abspath(rebound.__file__)))
+    librebound = "librebound" + sysconfig.get_config_var("EXT_SUFFIX")
+    if os.path.realpath(here) != os.path.realpath(site) and not os.path.exists(os.path.join(here, librebound)):
+        return (f"rebound_pfvi: cannot load its C core {path}: {error}. The core looks for REBOUND's "
+                f"C library {librebound} in {here}, where rebound_pfvi is installed, but the running "
+                f"rebound {rebound.__version__} is installed in {site} (a venv with "
+                f"--system-site-packages and the system's rebound?). Install the same rebound into this "
+                f"environment: {sys.executable} -m pip install --ignore-installed --no-deps "
+                f"'rebound=={rebound.__version__}'")
+    return (f"rebound_pfvi: cannot load its C core {path}: {error}. "
+            f"Rebuild it against the running rebound {rebound.__version__}: {rebuild_command()}")
+
+
 _error = range_mismatch(rebound.__version__, supported_range())
 if _error is not None:
     raise ImportError(_error)
@@ -86,8 +107,7 @@ _path = os.path.join(os.path.dirname(os.path.abspath(__file__)),
 try:
     lib = ctypes.CDLL(_path)
 except OSError as error:
-    raise ImportError(f"rebound_pfvi: cannot load its C core {_path}: {error}. "
-                      f"Rebuild it against the running rebound {rebound.__version__}: {rebuild_command()}") from error
+    raise ImportError(load_error(_path, error)) from error
 
 lib.pfvi_rebound_version_compiled.restype = ctypes.c_char_p
 lib.pfvi_rebound_version_compiled.argtypes = []

@@ -154,6 +154,31 @@ def test_installed_package_still_imports_after_being_moved(tmp_path):
     assert result.stdout.strip() == "100"
 
 
+def test_a_rebound_installed_elsewhere_is_named_with_the_command_that_helps(tmp_path):
+    # The guide's venv (--system-site-packages) with the system's rebound:
+    # rebound_pfvi in one site-packages, rebound and its C library in another.
+    # Rebuilding cannot help (the core finds librebound beside rebound_pfvi
+    # only); installing that rebound into the environment does.
+    site = os.path.dirname(os.path.dirname(os.path.abspath(rebound.__file__)))
+    elsewhere = tmp_path / "venv-site"
+    shutil.copytree(os.path.dirname(rebound_pfvi.__file__), elsewhere / "rebound_pfvi")
+    result = run_python(f"""
+        import sys
+        sys.path.insert(0, {str(elsewhere)!r})
+        import rebound
+        assert not rebound.__file__.startswith({str(elsewhere)!r})
+        import rebound_pfvi
+    """)
+    assert result.returncode != 0
+    message = result.stderr.strip().splitlines()[-1]
+    assert message.startswith("ImportError: rebound_pfvi: cannot load its C core " + str(elsewhere)), message
+    assert f"in {elsewhere}, where rebound_pfvi is installed, but the running rebound {rebound.__version__} " \
+           f"is installed in {site}" in message, message
+    assert message.endswith(f"{sys.executable} -m pip install --ignore-installed --no-deps "
+                            f"'rebound=={rebound.__version__}'"), message
+    assert "Rebuild" not in message
+
+
 def test_abi_check_refuses_a_core_built_against_another_rebound(monkeypatch):
     core = rebound_pfvi._core
     rebuild = f"{sys.executable} -m pip install --force-reinstall --no-deps "
