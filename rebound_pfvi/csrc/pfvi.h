@@ -859,6 +859,10 @@ struct pfvi_state {
     // predicted: "exact" solves the harmonic part of the force implicitly
     // and iterates on the residual a^k + omega^2 d^k only.
     double (*stage_x)[PFVI_STAGES_MAX][3];
+    // pfvi_gravity_stages' positions and forces, component-major with the
+    // stages as the innermost (vectorised) index.
+    double (*gravity_x)[3][PFVI_STAGES_MAX];
+    double (*gravity_a)[3][PFVI_STAGES_MAX];
     double (*predictor_x)[PFVI_STAGES_MAX][3];
     double (*unknowns)[PFVI_STAGES_MAX-1][3];
     double (*unknowns_next)[PFVI_STAGES_MAX-1][3];
@@ -1036,6 +1040,13 @@ PFVI_INTERNAL void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* s
 // Evaluates forces through REBOUND; 0 (rolled back, fault recorded) if they
 // are not finite or a callback changed N.
 PFVI_INTERNAL int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0);
+// pfvi_gravity.c: whether REBOUND's routine would compute only its basic
+// gravity (no additional forces, variations, ghost boxes or ignored terms),
+// which pfvi_gravity_stages then computes at stages k0 .. k1 of positions x
+// into a in one pass, bit for bit as REBOUND would stage by stage.
+PFVI_INTERNAL int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st, size_t N);
+PFVI_INTERNAL void pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
+        const double (*x)[PFVI_STAGES_MAX][3], double (*a)[PFVI_STAGES_MAX][3], int k0, int k1);
 PFVI_INTERNAL void pfvi_track_added(struct pfvi_state* st);
 PFVI_INTERNAL void pfvi_track_removed(struct pfvi_state* st, size_t index);
 // The iteration rule shared by every fixed-point iteration.

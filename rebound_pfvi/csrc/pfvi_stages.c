@@ -207,6 +207,43 @@ static void stage_velocity_times_h(const struct pfvi_stage_fit* f, const struct 
     }
 }
 
+// stage_forces where REBOUND would compute only its basic gravity: every
+// stage point of the iterate into stage_x, their forces in one pass
+// (pfvi_gravity.c) into stage_a, and the particles and t left as REBOUND's
+// trips leave them (at stage k_last). 0 where a force is not finite: the
+// caller then takes REBOUND's path, which names the cause and rolls back.
+static int stage_forces_own(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
+        int k_first, int k_last){
+    const int s = st->rule.s;
+    for (size_t i=0; i<N; i++){
+        for (int k=k_first; k<=k_last; k++){
+            stage_position(&st->stage_fit[i], &st->stage_start[i], &st->compensation[i],
+                    (const double (*)[3])st->unknowns[i], s, k, st->stage_x[i][k]);
+        }
+    }
+    pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a, k_first, k_last);
+    double sum = 0.;  // as in pfvi_update_acceleration: 0 unless a force is not finite
+    for (size_t i=0; i<N; i++){
+        for (int k=k_first; k<=k_last; k++){
+            sum += (st->stage_a[i][k][0] - st->stage_a[i][k][0]) + (st->stage_a[i][k][1] - st->stage_a[i][k][1])
+                + (st->stage_a[i][k][2] - st->stage_a[i][k][2]);
+        }
+    }
+    if (sum != 0.){
+        return 0;
+    }
+    st->statistics.n_force_evaluations += (uint64_t)(k_last - k_first + 1);
+    struct reb_particle* const ps = r->particles;
+    for (size_t i=0; i<N; i++){
+        const double* const x = st->stage_x[i][k_last];
+        const double* const a = st->stage_a[i][k_last];
+        ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
+        ps[i].ax = a[0]; ps[i].ay = a[1]; ps[i].az = a[2];
+    }
+    r->t = t0 + st->rule.c[k_last]*h;
+    return 1;
+}
+
 // Evaluates the forces at every stage point of the current iterate (and at
 // the first node too when forces depend on velocities, since its velocity is
 // the interpolant's, not v_k). Returns 0, rolled back, on a failure.
@@ -222,6 +259,9 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
     struct reb_particle* const ps = r->particles;
     struct reb_particle* const pv = r->particles_var;
     const size_t nv = st->var_N;
+    if (real && !vdep && pfvi_gravity_own(r, st, N) && stage_forces_own(r, st, N, t0, h, k_first, k_last)){
+        return 1;
+    }
     if (vdep){
         // The stage velocities of the current iterate, from the forces that
         // made it (stage_a, overwritten below).
