@@ -343,6 +343,7 @@ struct pfvi_lobatto {
     // sum_j mu_hat[i][j] (h w_j) A^j for forces that depend on velocities.
     double c_nu[PFVI_STAGES_MAX];
     double nu[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
+    double nu_t[PFVI_STAGES_MAX][PFVI_STAGES_MAX];   // nu transposed (nu_t[j][i] = nu[i][j]): rows as vector lanes
     double mu_hat[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
     double det_classical;   // determinant of the stage matrix at u = 0 (singularity guard), set by pfvi_fitting.c
 };
