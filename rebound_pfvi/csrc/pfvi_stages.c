@@ -351,7 +351,10 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
 // node. Returns which (the classical form starts from a retry's, otherwise
 // from the two-body predictor of pfvi_solve.c, which extrapolates only the
 // forces beyond each body's partner, from the last step's stages).
-static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
+// With tangent_only (a classical step whose first iterate the two-body
+// predictor draws) the stages beyond the start are only placeholders until
+// the first forces: the tangent path then, and no polynomial is evaluated.
+static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h, int tangent_only){
     const struct pfvi_lobatto* const rule = &st->rule;
     const int s = rule->s;
     // Extrapolated over more than a few of the source's lengths (a step
@@ -362,8 +365,9 @@ static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
         && fabs(h) <= ratio_max*fabs(st->retry_h);
     const int extrapolate = !retry && st->predictor_stages == s && st->predictor_N == N && st->predictor_t == t0
         && st->predictor_h != 0. && fabs(h) <= ratio_max*fabs(st->predictor_h);
+    const int polynomial = retry || (extrapolate && !tangent_only);
     double x[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
-    if (retry || extrapolate){
+    if (polynomial){
         // x[j][m] = l_m(tau_j): the Lagrange basis of the source's nodes at
         // this step's, in units of the source's step (which starts at t0 for
         // a retry, and ends there for the last step).
@@ -386,7 +390,7 @@ static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
         const double v0[3] = {p0[i].vx, p0[i].vy, p0[i].vz};
         for (int k=0; k<s; k++){
             for (int c=0; c<3; c++){
-                if (k == 0 || !(retry || extrapolate)){
+                if (k == 0 || !polynomial){
                     // The start acceleration, at the start position moved along its tangent.
                     const double t = rule->c[k]*h;
                     st->stage_a[i][k][c] = st->end[i].a[c];
@@ -845,7 +849,15 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
     for (size_t v=0; v<nv; v++){
         stage_start_of(rule, &st->stage_fit[st->var_real[v]], &st->var_start[v], &var_centre, h, &st->var_stage_start[v]);
     }
-    const int predicted = stage_predict(st, N, t0, h);
+    // Every particle in the classical form (no variations, no velocity-
+    // dependent force): unless this is a retry, the solve's two-body
+    // predictor draws the whole first iterate, and the extrapolated stages
+    // and their round would be overwritten unread.
+    int classical = (nv == 0) && !r->force_is_velocity_dependent;
+    for (size_t i=0; classical && i<N; i++){
+        classical = st->stage_fit[i].classical;
+    }
+    const int predicted = stage_predict(st, N, t0, h, classical);
     // The classical form's h w_j: the same products in every round and in
     // the update, so that the doubles' step is the IIIA-IIIB pair exactly.
     double hb[PFVI_STAGES_MAX];
@@ -854,8 +866,10 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
     }
 
     // The first iterate: one round from the predicted accelerations.
-    stage_rounds(st, N, h);
-    pfvi_solve_swap(st);
+    if (!classical || predicted == PFVI_PREDICTED_RETRY){
+        stage_rounds(st, N, h);
+        pfvi_solve_swap(st);
+    }
     st->var_solve_change = INFINITY;
     st->var_solve_previous = INFINITY;
     const enum pfvi_trial solved = pfvi_solve_stages(r, st, N, t0, h, &stage_solve_ops, predicted);
