@@ -233,9 +233,20 @@ static int stage_forces_own(struct reb_simulation* r, struct pfvi_state* st, siz
         int k_first, int k_last){
     const int s = st->rule.s;
     for (size_t i=0; i<N; i++){
+        const double (*y)[3] = (const double (*)[3])st->unknowns[i];
+        if (st->stage_fit[i].classical && k_first >= 1){
+            // stage_position of the classical form, its branches taken once
+            const double* const q0 = st->stage_start[i].q0;
+            const double* const comp = st->compensation[i].x;
+            for (int k=k_first; k<=k_last; k++){
+                for (int c=0; c<3; c++){
+                    st->stage_x[i][k][c] = (k == s - 1) ? q0[c] + (y[s-2][c] + comp[c]) : q0[c] + y[k-1][c];
+                }
+            }
+            continue;
+        }
         for (int k=k_first; k<=k_last; k++){
-            stage_position(&st->stage_fit[i], &st->stage_start[i], &st->compensation[i],
-                    (const double (*)[3])st->unknowns[i], s, k, st->stage_x[i][k]);
+            stage_position(&st->stage_fit[i], &st->stage_start[i], &st->compensation[i], y, s, k, st->stage_x[i][k]);
         }
     }
     pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a, k_first, k_last);
