@@ -41,6 +41,12 @@ not what it calls):
 
 A --baseline command (e.g. another build on PYTHONPATH) adds its rows for
 pfvi, counted the same way in the same run.
+
+--wall R: instead of counting, times pfvi's steps on the same systems (CPU
+time of sim.steps, no valgrind) for this build and the --baseline build,
+interleaved, best of R each, and prints the ratio: the wall-time judge of a
+change (instruction counts can fall while time does not). Steps:
+WALL_STEPS below.
 """
 import argparse
 import os
@@ -69,11 +75,19 @@ else:
         sim.add(m=1e-6, a=1.0 + 0.05 * k, e=0.05, inc=0.01 * (k % 7), f=2.1 * k)
 sim.move_to_com()
 sim.integrator = integrator
-sim.steps(steps)
+if len(sys.argv) > 4:   # timing: one step first (setup), then the steps timed
+    import time
+    sim.steps(1)
+    t = time.process_time()
+    sim.steps(steps)
+    print("NS", (time.process_time() - t) / steps * 1e9)
+else:
+    sim.steps(steps)
 print("STEPS", steps, sim.t)
 """
 
 STEPS = {2: 3000, 3: 3000, 11: 1000, 101: 60, 1001: 3}
+WALL_STEPS = {2: 30000, 3: 20000, 11: 4000, 101: 200, 1001: 4}
 
 CATEGORIES = ("gravity", "force interface", "solve / method", "predictor", "control", "contact", "output",
               "bookkeeping")
@@ -150,6 +164,20 @@ def count(prefix, n, integrator, steps, workdir):
     return {k: v / steps for k, v in totals.items()}
 
 
+def wall(prefixes, n, repeats, workdir):
+    script = os.path.join(workdir, "child.py")
+    with open(script, "w") as f:
+        f.write(CHILD)
+    best = [float("inf")] * len(prefixes)
+    for _ in range(repeats):
+        for k, prefix in enumerate(prefixes):
+            out = subprocess.run(["env"] + prefix + ["-P", script, str(n), "pfvi", str(WALL_STEPS[n]), "time"],
+                                 capture_output=True, text=True, check=True).stdout
+            ns = float(out.split("NS")[1].split()[0])
+            best[k] = min(best[k], ns)
+    return best
+
+
 def table(rows):
     head = ("| N | integrator | instructions/step | " + " | ".join(CATEGORIES) + " | own / gravity |")
     lines = [head, "|" + "---|" * (4 + len(CATEGORIES))]
@@ -167,7 +195,20 @@ def main():
     parser.add_argument("--integrators", default="pfvi,ias15,bs")
     parser.add_argument("--baseline", default=None, help="a command prefix running another build of pfvi")
     parser.add_argument("--output", default=None, help="write the markdown table here too")
+    parser.add_argument("--wall", type=int, default=0, metavar="R",
+                        help="time pfvi against --baseline instead (interleaved, best of R)")
     args = parser.parse_args()
+    if args.wall:
+        if not args.baseline:
+            sys.exit("step_budget: --wall needs --baseline")
+        lines = ["| N | this build: ns/step | baseline: ns/step | ratio |", "|---|---|---|---|"]
+        with tempfile.TemporaryDirectory() as workdir:
+            for n in [int(x) for x in args.sizes.split(",")]:
+                this, base = wall([[sys.executable], shlex.split(args.baseline)], n, args.wall, workdir)
+                lines.append(f"| {n} | {this:,.0f} | {base:,.0f} | {this / base:.2f} |")
+                print(lines[-1], file=sys.stderr)
+        print("\n".join(lines))
+        return
     if shutil.which("valgrind") is None:
         sys.exit("step_budget: needs valgrind (apt-get install valgrind)")
     sizes = [int(x) for x in args.sizes.split(",")]

@@ -30,6 +30,16 @@
 
 #define PFVI_API __attribute__((visibility("default")))
 #define PFVI_INTERNAL __attribute__((visibility("hidden")))
+// Four doubles as one value (GCC's and clang's vector extensions): loops over
+// the stages written with them run in vector registers on any processor
+// (two SSE2 halves, or one AVX2 register in a target clone). Each lane is
+// the scalar operation on its own, rounded alike: the same bits either way.
+typedef double pfvi_lanes __attribute__((vector_size(4*sizeof(double))));
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
+#define PFVI_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define PFVI_VECTOR_CLONES
+#endif
 
 // A macro's value as a string, for the field documentation.
 #define PFVI_STR_(x) #x

@@ -65,9 +65,7 @@ static inline __attribute__((always_inline)) void pair_terms(const double (*rest
 
 // Compiled twice, for AVX2 (4 lanes a vector) and for any x86-64 (SSE2, 2),
 // chosen by the processor at load time; elsewhere once. No FMA either way.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
-__attribute__((target_clones("avx2", "default")))
-#endif
+PFVI_VECTOR_CLONES
 void pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
         const double (*x)[PFVI_STAGES_MAX][3], double (*a)[PFVI_STAGES_MAX][3], int k0, int k1){
     const struct reb_particle* const ps = r->particles;

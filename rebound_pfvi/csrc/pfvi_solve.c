@@ -907,44 +907,72 @@ static void kepler_pull(const double r[3], double mu, double softening2, double 
 struct rest_weights {
     int extrapolated;
     double start[PFVI_STAGES_MAX];
-    double last[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
+    double last_t[PFVI_STAGES_MAX][PFVI_STAGES_MAX];   // last[k][m] as last_t[m][k]: the stages k as lanes
 };
 
+// The lanes k of last_t and start hold each sum in the scalar loop's order
+// (j, then m, ascending), so the vector loops give the scalar loops' bits.
+PFVI_VECTOR_CLONES
 static void rest_weights_of(const struct pfvi_lobatto* rule, const double (*basis)[PFVI_STAGES_MAX],
         struct rest_weights* rw){
     const int s = rule->s;
     rw->extrapolated = (basis != NULL);
+    memset(rw->start, 0, sizeof(rw->start));
     for (int k=1; k<s; k++){
         double start = rule->nu[k][0]*rule->w[0];
         for (int j=1; !basis && j<s-1; j++){
             start += rule->nu[k][j]*rule->w[j];
         }
         rw->start[k] = start;
-        if (!basis){
-            continue;
-        }
-        double last[PFVI_STAGES_MAX] = {0.};
+    }
+    if (!basis){
+        return;
+    }
+    pfvi_lanes nuw[PFVI_STAGES_MAX][2];   // nu[k][j] w_j, lanes k
+    for (int j=1; j<s-1; j++){
+        const pfvi_lanes w = {rule->w[j], rule->w[j], rule->w[j], rule->w[j]};
+        memcpy(&nuw[j][0], &rule->nu_t[j][0], sizeof(nuw[j][0]));
+        memcpy(&nuw[j][1], &rule->nu_t[j][4], sizeof(nuw[j][1]));
+        nuw[j][0] *= w;
+        nuw[j][1] *= w;
+    }
+    for (int m=0; m<PFVI_STAGES_MAX; m++){
+        pfvi_lanes lo = {0., 0., 0., 0.}, hi = {0., 0., 0., 0.};
         for (int j=1; j<s-1; j++){
-            const double nuw = rule->nu[k][j]*rule->w[j];
-            for (int m=0; m<PFVI_STAGES_MAX; m++){
-                last[m] += nuw*basis[j][m];
-            }
+            const double b = basis[j][m];
+            const pfvi_lanes bb = {b, b, b, b};
+            lo += nuw[j][0]*bb;
+            hi += nuw[j][1]*bb;
         }
-        memcpy(rw->last[k], last, sizeof(last));
+        memcpy(&rw->last_t[m][0], &lo, sizeof(lo));
+        memcpy(&rw->last_t[m][4], &hi, sizeof(hi));
     }
 }
 
+PFVI_VECTOR_CLONES
 static void rest_integral(const struct pfvi_state* st, const struct rest_weights* rw, double h,
         const double rest0[3], const double (*rest_old)[3], double (*out)[3]){
     const int s = st->rule.s;
     const double h2 = h*h;
-    for (int k=1; k<s; k++){
-        for (int c=0; c<3; c++){
-            double sum = rw->start[k]*rest0[c];
-            for (int m=0; rw->extrapolated && m<s; m++){
-                sum += rw->last[k][m]*rest_old[m][c];
-            }
-            out[k][c] = h2*sum;
+    pfvi_lanes start_lo, start_hi;
+    memcpy(&start_lo, &rw->start[0], sizeof(start_lo));
+    memcpy(&start_hi, &rw->start[4], sizeof(start_hi));
+    for (int c=0; c<3; c++){
+        const pfvi_lanes r0 = {rest0[c], rest0[c], rest0[c], rest0[c]};
+        pfvi_lanes lo = start_lo*r0, hi = start_hi*r0;
+        for (int m=0; rw->extrapolated && m<s; m++){
+            pfvi_lanes wl, wh;
+            memcpy(&wl, &rw->last_t[m][0], sizeof(wl));
+            memcpy(&wh, &rw->last_t[m][4], sizeof(wh));
+            const pfvi_lanes r = {rest_old[m][c], rest_old[m][c], rest_old[m][c], rest_old[m][c]};
+            lo += wl*r;
+            hi += wh*r;
+        }
+        double sum[PFVI_STAGES_MAX];
+        memcpy(sum, &lo, sizeof(lo));
+        memcpy(sum + 4, &hi, sizeof(hi));
+        for (int k=1; k<s; k++){
+            out[k][c] = h2*sum[k];
         }
     }
 }

@@ -108,8 +108,7 @@ static inline __attribute__((always_inline)) void stage_round_n(const struct pfv
 //     y[i-1] = Q^i - q_k = c_nu[i] h v_k + h sum_j nu[i][j] hb_j A^j
 // (i = 1 .. s-1; y[s-2] = q_k+1 - q_k). The last column of nu is zero: the
 // end force A^s does not act within the step it ends.
-typedef double stage_lanes __attribute__((vector_size(4*sizeof(double))));
-typedef char stage_lanes_cover_the_stages[(PFVI_STAGES_MAX == 8) ? 1 : -1];
+typedef char two_lanes_cover_the_stages[(PFVI_STAGES_MAX == 8) ? 1 : -1];
 
 static inline __attribute__((always_inline)) void classical_round_n(const struct pfvi_lobatto* rule,
         const struct pfvi_stage_start* ss, double h, const double* hb, const double (*sa)[3], double (*y)[3],
@@ -118,14 +117,14 @@ static inline __attribute__((always_inline)) void classical_round_n(const struct
     // with the rows as vector lanes (nu_t: a column of nu contiguous): each
     // lane rounds as the scalar sum would, so every vector width gives the
     // same bits. Lanes 0 .. 3 and 4 .. 7, for the three components.
-    stage_lanes lo[3] = {{0.}}, hi[3] = {{0.}};
+    pfvi_lanes lo[3] = {{0.}}, hi[3] = {{0.}};
     for (int j=0; j<s-1; j++){
-        stage_lanes nl, nh;
+        pfvi_lanes nl, nh;
         memcpy(&nl, &rule->nu_t[j][0], sizeof(nl));
         memcpy(&nh, &rule->nu_t[j][4], sizeof(nh));
         for (int c=0; c<3; c++){
             const double hbA = hb[j]*sa[j][c];
-            const stage_lanes b = {hbA, hbA, hbA, hbA};
+            const pfvi_lanes b = {hbA, hbA, hbA, hbA};
             lo[c] += nl*b;
             hi[c] += nh*b;
         }
@@ -141,9 +140,7 @@ static inline __attribute__((always_inline)) void classical_round_n(const struct
     }
 }
 
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
-__attribute__((target_clones("avx2", "default")))
-#endif
+PFVI_VECTOR_CLONES
 static void classical_round(const struct pfvi_lobatto* rule, const struct pfvi_stage_start* ss, double h,
         const double* hb, const double (*sa)[3], double (*y)[3]){
     switch (rule->s){
