@@ -220,36 +220,39 @@ static void tidal_apply(const struct pfvi_newton* u, int k, double g, const doub
 // newton_apply for the classical form of s stages, written for a constant s
 // (each s its own unrolled loops): X is the shift Q^k = q_k + y[k-1], the
 // coupled unknowns are the s - 2 interior stages, and the end y[s-2]
-// follows from them.
+// follows from them. Each row's three components are the lanes of one
+// vector (the fourth zero): every lane is the scalar operation on that
+// component, so the bits are those of the loop over components.
 static inline __attribute__((always_inline)) void newton_apply_classical_n(const struct pfvi_solve_form* f,
         const struct pfvi_newton* u, double (*b)[3], const int s){
     const int mc = s - 2;
+#define ROW(x, y, z) ((pfvi_lanes){(x), (y), (z), 0.})
+#define ALL(x) ((pfvi_lanes){(x), (x), (x), (x)})
+    pfvi_lanes B[PFVI_STAGES_MAX];
+    for (int l=0; l<s-1; l++){
+        B[l] = ROW(b[l][0], b[l][1], b[l][2]);
+    }
     for (int k=0; k<mc; k++){
         const int p = u->Ppiv[k];
-        for (int c=0; c<3; c++){
-            const double t = b[p][c]; b[p][c] = b[k][c]; b[k][c] = t;
-        }
+        const pfvi_lanes t = B[p]; B[p] = B[k]; B[k] = t;
     }
     for (int k=0; k<mc; k++){
         for (int i=k+1; i<mc; i++){
-            const double g = u->P[i][k];
-            for (int c=0; c<3; c++){
-                b[i][c] -= g*b[k][c];
-            }
+            B[i] -= ALL(u->P[i][k])*B[k];
         }
     }
     for (int k=mc-1; k>=0; k--){
-        for (int c=0; c<3; c++){
-            double sum = b[k][c];
-            for (int j=k+1; j<mc; j++){
-                sum -= u->P[k][j]*b[j][c];
-            }
-            b[k][c] = sum*u->Pinv[k];
+        pfvi_lanes sum = B[k];
+        for (int j=k+1; j<mc; j++){
+            sum -= ALL(u->P[k][j])*B[j];
         }
+        B[k] = sum*ALL(u->Pinv[k]);
     }
+    pfvi_lanes n[PFVI_STAGES_MAX];
     double t[PFVI_STAGES_MAX];
     for (int k=1; k<=mc; k++){
-        t[k-1] = u->n[k][0]*b[k-1][0] + u->n[k][1]*b[k-1][1] + u->n[k][2]*b[k-1][2];
+        n[k] = ROW(u->n[k][0], u->n[k][1], u->n[k][2]);
+        t[k-1] = u->n[k][0]*B[k-1][0] + u->n[k][1]*B[k-1][1] + u->n[k][2]*B[k-1][2];
     }
     for (int k=0; k<mc; k++){
         const int p = u->Cpiv[k];
@@ -271,19 +274,26 @@ static inline __attribute__((always_inline)) void newton_apply_classical_n(const
         const double tau = t[k-1]*u->d[k];
         for (int l=0; l<mc; l++){
             const double q = tau*u->Q[l][k];
-            b[l][0] -= q*u->n[k][0]; b[l][1] -= q*u->n[k][1]; b[l][2] -= q*u->n[k][2];
+            B[l] -= ALL(q)*n[k];
         }
     }
     for (int k=1; k<=mc; k++){
-        double Jdx[3];
-        tidal_apply(u, k, u->gc[k], b[k-1], Jdx);
-        const double S = f->S[s-2][k];
-        b[s-2][0] -= S*Jdx[0]; b[s-2][1] -= S*Jdx[1]; b[s-2][2] -= S*Jdx[2];
+        // tidal_apply: J dx = g dx + d n (n . dx)
+        const pfvi_lanes dx = B[k-1];
+        const double nd = u->d[k]*(u->n[k][0]*dx[0] + u->n[k][1]*dx[1] + u->n[k][2]*dx[2]);
+        const pfvi_lanes Jdx = ALL(u->gc[k])*dx + ALL(nd)*n[k];
+        B[s-2] -= ALL(f->S[s-2][k])*Jdx;
     }
+    for (int l=0; l<s-1; l++){
+        b[l][0] = B[l][0]; b[l][1] = B[l][1]; b[l][2] = B[l][2];
+    }
+#undef ROW
+#undef ALL
 }
 
 // b <- M^-1 b for a factorised unit (b: m rows of 3): the coupled unknowns
 // by Woodbury's identity, the others (the classical end) from them.
+PFVI_VECTOR_CLONES
 static void newton_apply(const struct pfvi_solve_form* f, const struct pfvi_newton* u, double (*b)[3]){
     if (f->classical){
         switch (f->m + 1){
