@@ -123,6 +123,85 @@ static int coupled_unknowns(const struct pfvi_solve_form* f){
     return mc;
 }
 
+// The classical form's Q = P^-1 S (columns 1 .. K) and Woodbury's
+// capacitance matrix, with the K columns as vector lanes (lane c: column
+// 1 + c): each lane the scalar solve's and product's operations, so the
+// bits of lu_solve's columns and the scalar loop's entries.
+static inline __attribute__((always_inline)) void newton_factor_classical_rest(const struct pfvi_solve_form* f,
+        const double (*n)[3], struct pfvi_newton* u, const int mc, const int K){
+#define ALL(x) ((pfvi_lanes){(x), (x), (x), (x)})
+    pfvi_lanes lo[PFVI_STAGES_MAX], hi[PFVI_STAGES_MAX];
+    for (int l=0; l<mc; l++){
+        double row[8] = {0., 0., 0., 0., 0., 0., 0., 0.};
+        for (int c=0; c<K; c++){
+            row[c] = f->S[l][1 + c];
+        }
+        memcpy(&lo[l], row, sizeof(lo[l]));
+        memcpy(&hi[l], row + 4, sizeof(hi[l]));
+    }
+    for (int k=0; k<mc; k++){
+        const int p = u->Ppiv[k];
+        pfvi_lanes t = lo[p]; lo[p] = lo[k]; lo[k] = t;
+        t = hi[p]; hi[p] = hi[k]; hi[k] = t;
+    }
+    for (int k=0; k<mc; k++){
+        for (int i=k+1; i<mc; i++){
+            const pfvi_lanes g = ALL(u->P[i][k]);
+            lo[i] -= g*lo[k];
+            hi[i] -= g*hi[k];
+        }
+    }
+    for (int k=mc-1; k>=0; k--){
+        pfvi_lanes sl = lo[k], sh = hi[k];
+        for (int j=k+1; j<mc; j++){
+            const pfvi_lanes a = ALL(u->P[k][j]);
+            sl -= a*lo[j];
+            sh -= a*hi[j];
+        }
+        lo[k] = sl*ALL(u->Pinv[k]);
+        hi[k] = sh*ALL(u->Pinv[k]);
+    }
+    double d[8] = {0.}, nx[8] = {0.}, ny[8] = {0.}, nz[8] = {0.};
+    for (int l=0; l<mc; l++){
+        double row[8];
+        memcpy(row, &lo[l], sizeof(lo[l]));
+        memcpy(row + 4, &hi[l], sizeof(hi[l]));
+        for (int c=0; c<K; c++){
+            u->Q[l][1 + c] = row[c];
+        }
+    }
+    for (int c=0; c<K; c++){
+        d[c] = u->d[1 + c];
+        nx[c] = n[1 + c][0]; ny[c] = n[1 + c][1]; nz[c] = n[1 + c][2];
+    }
+    pfvi_lanes D[2], NX[2], NY[2], NZ[2];
+    for (int h=0; h<2; h++){
+        memcpy(&D[h], d + 4*h, sizeof(D[h]));
+        memcpy(&NX[h], nx + 4*h, sizeof(NX[h]));
+        memcpy(&NY[h], ny + 4*h, sizeof(NY[h]));
+        memcpy(&NZ[h], nz + 4*h, sizeof(NZ[h]));
+    }
+    for (int k=1; k<=K; k++){
+        // H[k][kk] = Q[k-1][kk] (the shift); C = delta + d_kk H (n_k . n_kk)
+        double hrow[8] = {0., 0., 0., 0., 0., 0., 0., 0.};
+        for (int c=0; c<K; c++){
+            hrow[c] = u->Q[k-1][1 + c];
+        }
+        double out[8];
+        for (int h=0; h<2; h++){
+            pfvi_lanes H;
+            memcpy(&H, hrow + 4*h, sizeof(H));
+            const pfvi_lanes nn = ALL(n[k][0])*NX[h] + ALL(n[k][1])*NY[h] + ALL(n[k][2])*NZ[h];
+            const pfvi_lanes v = (D[h]*H)*nn;
+            memcpy(out + 4*h, &v, sizeof(v));
+        }
+        for (int c=0; c<K; c++){
+            u->C[k-1][c] = ((k == 1 + c) ? 1. : 0.) + out[c];
+        }
+    }
+#undef ALL
+}
+
 // One body's (or one mutual pair's relative) Newton matrix at the stages of
 // the first iterate over the coupled unknowns' components,
 //     M = P (x) I_3 + sum_k d_k (S e_k (x) n_k)(X^T e_k (x) n_k)^T,
@@ -160,6 +239,10 @@ static inline __attribute__((always_inline)) int newton_factor_form(const struct
     if (!lu_factor(mc, u->P, u->Ppiv, u->Pinv)){
         return 0;
     }
+    if (classical){
+        newton_factor_classical_rest(f, n, u, mc, K);
+        return lu_factor(K, u->C, u->Cpiv, u->Cinv);
+    }
     // Q = P^-1 S, its columns 1 .. K (in rows of up to 3: the solve's width).
     for (int k0=1; k0<=K; k0+=3){
         double cols[PFVI_STAGES_MAX][3];
@@ -193,6 +276,7 @@ static inline __attribute__((always_inline)) int newton_factor_form(const struct
     return lu_factor(K, u->C, u->Cpiv, u->Cinv);
 }
 
+PFVI_VECTOR_CLONES
 static int newton_factor(const struct pfvi_solve_form* f, const double (*n)[3], const double* alpha,
         struct pfvi_newton* u){
     if (f->classical && f->k_last == f->m - 1){
