@@ -58,7 +58,7 @@ core = Extension(
     sources=[os.path.join("rebound_pfvi", "csrc", f) for f in
              ("pfvi_integrator.c", "pfvi_control.c", "pfvi_step.c", "pfvi_two_point.c", "pfvi_stages.c", "pfvi_solve.c",
               "pfvi_fitting.c", "pfvi_lobatto.c", "pfvi_osculating.c", "pfvi_centre.c", "pfvi_timescales.c", "pfvi_state.c",
-               "pfvi_output.c", "pfvi_contact.c")],
+               "pfvi_output.c", "pfvi_contact.c", "pfvi_gravity.c")],
     libraries=["m"],
     extra_compile_args=["-std=c99", "-O3", "-fvisibility=hidden", "-Wall", "-Wextra",
                         "-D_GNU_SOURCE", "-fno-math-errno"],

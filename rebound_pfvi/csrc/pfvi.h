@@ -30,6 +30,16 @@
 
 #define PFVI_API __attribute__((visibility("default")))
 #define PFVI_INTERNAL __attribute__((visibility("hidden")))
+// Four doubles as one value (GCC's and clang's vector extensions): loops over
+// the stages written with them run in vector registers on any processor
+// (two SSE2 halves, or one AVX2 register in a target clone). Each lane is
+// the scalar operation on its own, rounded alike: the same bits either way.
+typedef double pfvi_lanes __attribute__((vector_size(4*sizeof(double))));
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
+#define PFVI_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define PFVI_VECTOR_CLONES
+#endif
 
 // A macro's value as a string, for the field documentation.
 #define PFVI_STR_(x) #x
@@ -343,6 +353,7 @@ struct pfvi_lobatto {
     // sum_j mu_hat[i][j] (h w_j) A^j for forces that depend on velocities.
     double c_nu[PFVI_STAGES_MAX];
     double nu[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
+    double nu_t[PFVI_STAGES_MAX][PFVI_STAGES_MAX];   // nu transposed (nu_t[j][i] = nu[i][j]): rows as vector lanes
     double mu_hat[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
     double det_classical;   // determinant of the stage matrix at u = 0 (singularity guard), set by pfvi_fitting.c
 };
@@ -859,6 +870,10 @@ struct pfvi_state {
     // predicted: "exact" solves the harmonic part of the force implicitly
     // and iterates on the residual a^k + omega^2 d^k only.
     double (*stage_x)[PFVI_STAGES_MAX][3];
+    // pfvi_gravity_stages' positions and forces, component-major with the
+    // stages as the innermost (vectorised) index.
+    double (*gravity_x)[3][PFVI_STAGES_MAX];
+    double (*gravity_a)[3][PFVI_STAGES_MAX];
     double (*predictor_x)[PFVI_STAGES_MAX][3];
     double (*unknowns)[PFVI_STAGES_MAX-1][3];
     double (*unknowns_next)[PFVI_STAGES_MAX-1][3];
@@ -1036,6 +1051,13 @@ PFVI_INTERNAL void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* s
 // Evaluates forces through REBOUND; 0 (rolled back, fault recorded) if they
 // are not finite or a callback changed N.
 PFVI_INTERNAL int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0);
+// pfvi_gravity.c: whether REBOUND's routine would compute only its basic
+// gravity (no additional forces, variations, ghost boxes or ignored terms),
+// which pfvi_gravity_stages then computes at stages k0 .. k1 of positions x
+// into a in one pass, bit for bit as REBOUND would stage by stage.
+PFVI_INTERNAL int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st, size_t N);
+PFVI_INTERNAL void pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
+        const double (*x)[PFVI_STAGES_MAX][3], double (*a)[PFVI_STAGES_MAX][3], int k0, int k1);
 PFVI_INTERNAL void pfvi_track_added(struct pfvi_state* st);
 PFVI_INTERNAL void pfvi_track_removed(struct pfvi_state* st, size_t index);
 // The iteration rule shared by every fixed-point iteration.

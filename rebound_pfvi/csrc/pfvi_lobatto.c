@@ -165,6 +165,11 @@ int pfvi_lobatto_compute(int s, struct pfvi_lobatto* rule){
         rule->a[k][k] = (double)diagonal;
     }
     nystrom_form(s, x, rule);
+    for (int i=0; i<s; i++){
+        for (int j=0; j<s; j++){
+            rule->nu_t[j][i] = rule->nu[i][j];
+        }
+    }
     return 1;
 }
 

@@ -123,6 +123,85 @@ static int coupled_unknowns(const struct pfvi_solve_form* f){
     return mc;
 }
 
+// The classical form's Q = P^-1 S (columns 1 .. K) and Woodbury's
+// capacitance matrix, with the K columns as vector lanes (lane c: column
+// 1 + c): each lane the scalar solve's and product's operations, so the
+// bits of lu_solve's columns and the scalar loop's entries.
+static inline __attribute__((always_inline)) void newton_factor_classical_rest(const struct pfvi_solve_form* f,
+        const double (*n)[3], struct pfvi_newton* u, const int mc, const int K){
+#define ALL(x) ((pfvi_lanes){(x), (x), (x), (x)})
+    pfvi_lanes lo[PFVI_STAGES_MAX], hi[PFVI_STAGES_MAX];
+    for (int l=0; l<mc; l++){
+        double row[8] = {0., 0., 0., 0., 0., 0., 0., 0.};
+        for (int c=0; c<K; c++){
+            row[c] = f->S[l][1 + c];
+        }
+        memcpy(&lo[l], row, sizeof(lo[l]));
+        memcpy(&hi[l], row + 4, sizeof(hi[l]));
+    }
+    for (int k=0; k<mc; k++){
+        const int p = u->Ppiv[k];
+        pfvi_lanes t = lo[p]; lo[p] = lo[k]; lo[k] = t;
+        t = hi[p]; hi[p] = hi[k]; hi[k] = t;
+    }
+    for (int k=0; k<mc; k++){
+        for (int i=k+1; i<mc; i++){
+            const pfvi_lanes g = ALL(u->P[i][k]);
+            lo[i] -= g*lo[k];
+            hi[i] -= g*hi[k];
+        }
+    }
+    for (int k=mc-1; k>=0; k--){
+        pfvi_lanes sl = lo[k], sh = hi[k];
+        for (int j=k+1; j<mc; j++){
+            const pfvi_lanes a = ALL(u->P[k][j]);
+            sl -= a*lo[j];
+            sh -= a*hi[j];
+        }
+        lo[k] = sl*ALL(u->Pinv[k]);
+        hi[k] = sh*ALL(u->Pinv[k]);
+    }
+    double d[8] = {0.}, nx[8] = {0.}, ny[8] = {0.}, nz[8] = {0.};
+    for (int l=0; l<mc; l++){
+        double row[8];
+        memcpy(row, &lo[l], sizeof(lo[l]));
+        memcpy(row + 4, &hi[l], sizeof(hi[l]));
+        for (int c=0; c<K; c++){
+            u->Q[l][1 + c] = row[c];
+        }
+    }
+    for (int c=0; c<K; c++){
+        d[c] = u->d[1 + c];
+        nx[c] = n[1 + c][0]; ny[c] = n[1 + c][1]; nz[c] = n[1 + c][2];
+    }
+    pfvi_lanes D[2], NX[2], NY[2], NZ[2];
+    for (int h=0; h<2; h++){
+        memcpy(&D[h], d + 4*h, sizeof(D[h]));
+        memcpy(&NX[h], nx + 4*h, sizeof(NX[h]));
+        memcpy(&NY[h], ny + 4*h, sizeof(NY[h]));
+        memcpy(&NZ[h], nz + 4*h, sizeof(NZ[h]));
+    }
+    for (int k=1; k<=K; k++){
+        // H[k][kk] = Q[k-1][kk] (the shift); C = delta + d_kk H (n_k . n_kk)
+        double hrow[8] = {0., 0., 0., 0., 0., 0., 0., 0.};
+        for (int c=0; c<K; c++){
+            hrow[c] = u->Q[k-1][1 + c];
+        }
+        double out[8];
+        for (int h=0; h<2; h++){
+            pfvi_lanes H;
+            memcpy(&H, hrow + 4*h, sizeof(H));
+            const pfvi_lanes nn = ALL(n[k][0])*NX[h] + ALL(n[k][1])*NY[h] + ALL(n[k][2])*NZ[h];
+            const pfvi_lanes v = (D[h]*H)*nn;
+            memcpy(out + 4*h, &v, sizeof(v));
+        }
+        for (int c=0; c<K; c++){
+            u->C[k-1][c] = ((k == 1 + c) ? 1. : 0.) + out[c];
+        }
+    }
+#undef ALL
+}
+
 // One body's (or one mutual pair's relative) Newton matrix at the stages of
 // the first iterate over the coupled unknowns' components,
 //     M = P (x) I_3 + sum_k d_k (S e_k (x) n_k)(X^T e_k (x) n_k)^T,
@@ -160,6 +239,10 @@ static inline __attribute__((always_inline)) int newton_factor_form(const struct
     if (!lu_factor(mc, u->P, u->Ppiv, u->Pinv)){
         return 0;
     }
+    if (classical){
+        newton_factor_classical_rest(f, n, u, mc, K);
+        return lu_factor(K, u->C, u->Cpiv, u->Cinv);
+    }
     // Q = P^-1 S, its columns 1 .. K (in rows of up to 3: the solve's width).
     for (int k0=1; k0<=K; k0+=3){
         double cols[PFVI_STAGES_MAX][3];
@@ -193,6 +276,7 @@ static inline __attribute__((always_inline)) int newton_factor_form(const struct
     return lu_factor(K, u->C, u->Cpiv, u->Cinv);
 }
 
+PFVI_VECTOR_CLONES
 static int newton_factor(const struct pfvi_solve_form* f, const double (*n)[3], const double* alpha,
         struct pfvi_newton* u){
     if (f->classical && f->k_last == f->m - 1){
@@ -220,36 +304,39 @@ static void tidal_apply(const struct pfvi_newton* u, int k, double g, const doub
 // newton_apply for the classical form of s stages, written for a constant s
 // (each s its own unrolled loops): X is the shift Q^k = q_k + y[k-1], the
 // coupled unknowns are the s - 2 interior stages, and the end y[s-2]
-// follows from them.
+// follows from them. Each row's three components are the lanes of one
+// vector (the fourth zero): every lane is the scalar operation on that
+// component, so the bits are those of the loop over components.
 static inline __attribute__((always_inline)) void newton_apply_classical_n(const struct pfvi_solve_form* f,
         const struct pfvi_newton* u, double (*b)[3], const int s){
     const int mc = s - 2;
+#define ROW(x, y, z) ((pfvi_lanes){(x), (y), (z), 0.})
+#define ALL(x) ((pfvi_lanes){(x), (x), (x), (x)})
+    pfvi_lanes B[PFVI_STAGES_MAX];
+    for (int l=0; l<s-1; l++){
+        B[l] = ROW(b[l][0], b[l][1], b[l][2]);
+    }
     for (int k=0; k<mc; k++){
         const int p = u->Ppiv[k];
-        for (int c=0; c<3; c++){
-            const double t = b[p][c]; b[p][c] = b[k][c]; b[k][c] = t;
-        }
+        const pfvi_lanes t = B[p]; B[p] = B[k]; B[k] = t;
     }
     for (int k=0; k<mc; k++){
         for (int i=k+1; i<mc; i++){
-            const double g = u->P[i][k];
-            for (int c=0; c<3; c++){
-                b[i][c] -= g*b[k][c];
-            }
+            B[i] -= ALL(u->P[i][k])*B[k];
         }
     }
     for (int k=mc-1; k>=0; k--){
-        for (int c=0; c<3; c++){
-            double sum = b[k][c];
-            for (int j=k+1; j<mc; j++){
-                sum -= u->P[k][j]*b[j][c];
-            }
-            b[k][c] = sum*u->Pinv[k];
+        pfvi_lanes sum = B[k];
+        for (int j=k+1; j<mc; j++){
+            sum -= ALL(u->P[k][j])*B[j];
         }
+        B[k] = sum*ALL(u->Pinv[k]);
     }
+    pfvi_lanes n[PFVI_STAGES_MAX];
     double t[PFVI_STAGES_MAX];
     for (int k=1; k<=mc; k++){
-        t[k-1] = u->n[k][0]*b[k-1][0] + u->n[k][1]*b[k-1][1] + u->n[k][2]*b[k-1][2];
+        n[k] = ROW(u->n[k][0], u->n[k][1], u->n[k][2]);
+        t[k-1] = u->n[k][0]*B[k-1][0] + u->n[k][1]*B[k-1][1] + u->n[k][2]*B[k-1][2];
     }
     for (int k=0; k<mc; k++){
         const int p = u->Cpiv[k];
@@ -271,19 +358,26 @@ static inline __attribute__((always_inline)) void newton_apply_classical_n(const
         const double tau = t[k-1]*u->d[k];
         for (int l=0; l<mc; l++){
             const double q = tau*u->Q[l][k];
-            b[l][0] -= q*u->n[k][0]; b[l][1] -= q*u->n[k][1]; b[l][2] -= q*u->n[k][2];
+            B[l] -= ALL(q)*n[k];
         }
     }
     for (int k=1; k<=mc; k++){
-        double Jdx[3];
-        tidal_apply(u, k, u->gc[k], b[k-1], Jdx);
-        const double S = f->S[s-2][k];
-        b[s-2][0] -= S*Jdx[0]; b[s-2][1] -= S*Jdx[1]; b[s-2][2] -= S*Jdx[2];
+        // tidal_apply: J dx = g dx + d n (n . dx)
+        const pfvi_lanes dx = B[k-1];
+        const double nd = u->d[k]*(u->n[k][0]*dx[0] + u->n[k][1]*dx[1] + u->n[k][2]*dx[2]);
+        const pfvi_lanes Jdx = ALL(u->gc[k])*dx + ALL(nd)*n[k];
+        B[s-2] -= ALL(f->S[s-2][k])*Jdx;
     }
+    for (int l=0; l<s-1; l++){
+        b[l][0] = B[l][0]; b[l][1] = B[l][1]; b[l][2] = B[l][2];
+    }
+#undef ROW
+#undef ALL
 }
 
 // b <- M^-1 b for a factorised unit (b: m rows of 3): the coupled unknowns
 // by Woodbury's identity, the others (the classical end) from them.
+PFVI_VECTOR_CLONES
 static void newton_apply(const struct pfvi_solve_form* f, const struct pfvi_newton* u, double (*b)[3]){
     if (f->classical){
         switch (f->m + 1){
@@ -907,44 +1001,72 @@ static void kepler_pull(const double r[3], double mu, double softening2, double 
 struct rest_weights {
     int extrapolated;
     double start[PFVI_STAGES_MAX];
-    double last[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
+    double last_t[PFVI_STAGES_MAX][PFVI_STAGES_MAX];   // last[k][m] as last_t[m][k]: the stages k as lanes
 };
 
+// The lanes k of last_t and start hold each sum in the scalar loop's order
+// (j, then m, ascending), so the vector loops give the scalar loops' bits.
+PFVI_VECTOR_CLONES
 static void rest_weights_of(const struct pfvi_lobatto* rule, const double (*basis)[PFVI_STAGES_MAX],
         struct rest_weights* rw){
     const int s = rule->s;
     rw->extrapolated = (basis != NULL);
+    memset(rw->start, 0, sizeof(rw->start));
     for (int k=1; k<s; k++){
         double start = rule->nu[k][0]*rule->w[0];
         for (int j=1; !basis && j<s-1; j++){
             start += rule->nu[k][j]*rule->w[j];
         }
         rw->start[k] = start;
-        if (!basis){
-            continue;
-        }
-        double last[PFVI_STAGES_MAX] = {0.};
+    }
+    if (!basis){
+        return;
+    }
+    pfvi_lanes nuw[PFVI_STAGES_MAX][2];   // nu[k][j] w_j, lanes k
+    for (int j=1; j<s-1; j++){
+        const pfvi_lanes w = {rule->w[j], rule->w[j], rule->w[j], rule->w[j]};
+        memcpy(&nuw[j][0], &rule->nu_t[j][0], sizeof(nuw[j][0]));
+        memcpy(&nuw[j][1], &rule->nu_t[j][4], sizeof(nuw[j][1]));
+        nuw[j][0] *= w;
+        nuw[j][1] *= w;
+    }
+    for (int m=0; m<PFVI_STAGES_MAX; m++){
+        pfvi_lanes lo = {0., 0., 0., 0.}, hi = {0., 0., 0., 0.};
         for (int j=1; j<s-1; j++){
-            const double nuw = rule->nu[k][j]*rule->w[j];
-            for (int m=0; m<PFVI_STAGES_MAX; m++){
-                last[m] += nuw*basis[j][m];
-            }
+            const double b = basis[j][m];
+            const pfvi_lanes bb = {b, b, b, b};
+            lo += nuw[j][0]*bb;
+            hi += nuw[j][1]*bb;
         }
-        memcpy(rw->last[k], last, sizeof(last));
+        memcpy(&rw->last_t[m][0], &lo, sizeof(lo));
+        memcpy(&rw->last_t[m][4], &hi, sizeof(hi));
     }
 }
 
+PFVI_VECTOR_CLONES
 static void rest_integral(const struct pfvi_state* st, const struct rest_weights* rw, double h,
         const double rest0[3], const double (*rest_old)[3], double (*out)[3]){
     const int s = st->rule.s;
     const double h2 = h*h;
-    for (int k=1; k<s; k++){
-        for (int c=0; c<3; c++){
-            double sum = rw->start[k]*rest0[c];
-            for (int m=0; rw->extrapolated && m<s; m++){
-                sum += rw->last[k][m]*rest_old[m][c];
-            }
-            out[k][c] = h2*sum;
+    pfvi_lanes start_lo, start_hi;
+    memcpy(&start_lo, &rw->start[0], sizeof(start_lo));
+    memcpy(&start_hi, &rw->start[4], sizeof(start_hi));
+    for (int c=0; c<3; c++){
+        const pfvi_lanes r0 = {rest0[c], rest0[c], rest0[c], rest0[c]};
+        pfvi_lanes lo = start_lo*r0, hi = start_hi*r0;
+        for (int m=0; rw->extrapolated && m<s; m++){
+            pfvi_lanes wl, wh;
+            memcpy(&wl, &rw->last_t[m][0], sizeof(wl));
+            memcpy(&wh, &rw->last_t[m][4], sizeof(wh));
+            const pfvi_lanes r = {rest_old[m][c], rest_old[m][c], rest_old[m][c], rest_old[m][c]};
+            lo += wl*r;
+            hi += wh*r;
+        }
+        double sum[PFVI_STAGES_MAX];
+        memcpy(sum, &lo, sizeof(lo));
+        memcpy(sum + 4, &hi, sizeof(hi));
+        for (int k=1; k<s; k++){
+            out[k][c] = h2*sum[k];
         }
     }
 }

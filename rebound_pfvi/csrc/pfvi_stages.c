@@ -108,25 +108,39 @@ static inline __attribute__((always_inline)) void stage_round_n(const struct pfv
 //     y[i-1] = Q^i - q_k = c_nu[i] h v_k + h sum_j nu[i][j] hb_j A^j
 // (i = 1 .. s-1; y[s-2] = q_k+1 - q_k). The last column of nu is zero: the
 // end force A^s does not act within the step it ends.
+typedef char two_lanes_cover_the_stages[(PFVI_STAGES_MAX == 8) ? 1 : -1];
+
 static inline __attribute__((always_inline)) void classical_round_n(const struct pfvi_lobatto* rule,
         const struct pfvi_stage_start* ss, double h, const double* hb, const double (*sa)[3], double (*y)[3],
         const int s){
-    for (int c=0; c<3; c++){
-        double hbA[PFVI_STAGES_MAX];
-        for (int j=0; j<s-1; j++){
-            hbA[j] = hb[j]*sa[j][c];
+    // Each row i's sum over j in ascending order, as a scalar loop adds it,
+    // with the rows as vector lanes (nu_t: a column of nu contiguous): each
+    // lane rounds as the scalar sum would, so every vector width gives the
+    // same bits. Lanes 0 .. 3 and 4 .. 7, for the three components.
+    pfvi_lanes lo[3] = {{0.}}, hi[3] = {{0.}};
+    for (int j=0; j<s-1; j++){
+        pfvi_lanes nl, nh;
+        memcpy(&nl, &rule->nu_t[j][0], sizeof(nl));
+        memcpy(&nh, &rule->nu_t[j][4], sizeof(nh));
+        for (int c=0; c<3; c++){
+            const double hbA = hb[j]*sa[j][c];
+            const pfvi_lanes b = {hbA, hbA, hbA, hbA};
+            lo[c] += nl*b;
+            hi[c] += nh*b;
         }
+    }
+    for (int c=0; c<3; c++){
+        double sum[PFVI_STAGES_MAX];
+        memcpy(sum, &lo[c], sizeof(lo[c]));
+        memcpy(sum + 4, &hi[c], sizeof(hi[c]));
         const double hv = h*ss->v0[c];
         for (int i=1; i<s; i++){
-            double sum = 0.;
-            for (int j=0; j<s-1; j++){
-                sum += rule->nu[i][j]*hbA[j];
-            }
-            y[i-1][c] = rule->c_nu[i]*hv + h*sum;
+            y[i-1][c] = rule->c_nu[i]*hv + h*sum[i];
         }
     }
 }
 
+PFVI_VECTOR_CLONES
 static void classical_round(const struct pfvi_lobatto* rule, const struct pfvi_stage_start* ss, double h,
         const double* hb, const double (*sa)[3], double (*y)[3]){
     switch (rule->s){
@@ -207,6 +221,54 @@ static void stage_velocity_times_h(const struct pfvi_stage_fit* f, const struct 
     }
 }
 
+// stage_forces where REBOUND would compute only its basic gravity: every
+// stage point of the iterate into stage_x, their forces in one pass
+// (pfvi_gravity.c) into stage_a, and the particles and t left as REBOUND's
+// trips leave them (at stage k_last). 0 where a force is not finite: the
+// caller then takes REBOUND's path, which names the cause and rolls back.
+static int stage_forces_own(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
+        int k_first, int k_last){
+    const int s = st->rule.s;
+    for (size_t i=0; i<N; i++){
+        const double (*y)[3] = (const double (*)[3])st->unknowns[i];
+        if (st->stage_fit[i].classical && k_first >= 1){
+            // stage_position of the classical form, its branches taken once
+            const double* const q0 = st->stage_start[i].q0;
+            const double* const comp = st->compensation[i].x;
+            for (int k=k_first; k<=k_last; k++){
+                for (int c=0; c<3; c++){
+                    st->stage_x[i][k][c] = (k == s - 1) ? q0[c] + (y[s-2][c] + comp[c]) : q0[c] + y[k-1][c];
+                }
+            }
+            continue;
+        }
+        for (int k=k_first; k<=k_last; k++){
+            stage_position(&st->stage_fit[i], &st->stage_start[i], &st->compensation[i], y, s, k, st->stage_x[i][k]);
+        }
+    }
+    pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a, k_first, k_last);
+    double sum = 0.;  // as in pfvi_update_acceleration: 0 unless a force is not finite
+    for (size_t i=0; i<N; i++){
+        for (int k=k_first; k<=k_last; k++){
+            sum += (st->stage_a[i][k][0] - st->stage_a[i][k][0]) + (st->stage_a[i][k][1] - st->stage_a[i][k][1])
+                + (st->stage_a[i][k][2] - st->stage_a[i][k][2]);
+        }
+    }
+    if (sum != 0.){
+        return 0;
+    }
+    st->statistics.n_force_evaluations += (uint64_t)(k_last - k_first + 1);
+    struct reb_particle* const ps = r->particles;
+    for (size_t i=0; i<N; i++){
+        const double* const x = st->stage_x[i][k_last];
+        const double* const a = st->stage_a[i][k_last];
+        ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
+        ps[i].ax = a[0]; ps[i].ay = a[1]; ps[i].az = a[2];
+    }
+    r->t = t0 + st->rule.c[k_last]*h;
+    return 1;
+}
+
 // Evaluates the forces at every stage point of the current iterate (and at
 // the first node too when forces depend on velocities, since its velocity is
 // the interpolant's, not v_k). Returns 0, rolled back, on a failure.
@@ -222,6 +284,9 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
     struct reb_particle* const ps = r->particles;
     struct reb_particle* const pv = r->particles_var;
     const size_t nv = st->var_N;
+    if (real && !vdep && pfvi_gravity_own(r, st, N) && stage_forces_own(r, st, N, t0, h, k_first, k_last)){
+        return 1;
+    }
     if (vdep){
         // The stage velocities of the current iterate, from the forces that
         // made it (stage_a, overwritten below).
@@ -294,7 +359,10 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
 // node. Returns which (the classical form starts from a retry's, otherwise
 // from the two-body predictor of pfvi_solve.c, which extrapolates only the
 // forces beyond each body's partner, from the last step's stages).
-static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
+// With tangent_only (a classical step whose first iterate the two-body
+// predictor draws) the stages beyond the start are only placeholders until
+// the first forces: the tangent path then, and no polynomial is evaluated.
+static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h, int tangent_only){
     const struct pfvi_lobatto* const rule = &st->rule;
     const int s = rule->s;
     // Extrapolated over more than a few of the source's lengths (a step
@@ -305,8 +373,9 @@ static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
         && fabs(h) <= ratio_max*fabs(st->retry_h);
     const int extrapolate = !retry && st->predictor_stages == s && st->predictor_N == N && st->predictor_t == t0
         && st->predictor_h != 0. && fabs(h) <= ratio_max*fabs(st->predictor_h);
+    const int polynomial = retry || (extrapolate && !tangent_only);
     double x[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
-    if (retry || extrapolate){
+    if (polynomial){
         // x[j][m] = l_m(tau_j): the Lagrange basis of the source's nodes at
         // this step's, in units of the source's step (which starts at t0 for
         // a retry, and ends there for the last step).
@@ -329,7 +398,7 @@ static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h){
         const double v0[3] = {p0[i].vx, p0[i].vy, p0[i].vz};
         for (int k=0; k<s; k++){
             for (int c=0; c<3; c++){
-                if (k == 0 || !(retry || extrapolate)){
+                if (k == 0 || !polynomial){
                     // The start acceleration, at the start position moved along its tangent.
                     const double t = rule->c[k]*h;
                     st->stage_a[i][k][c] = st->end[i].a[c];
@@ -788,7 +857,15 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
     for (size_t v=0; v<nv; v++){
         stage_start_of(rule, &st->stage_fit[st->var_real[v]], &st->var_start[v], &var_centre, h, &st->var_stage_start[v]);
     }
-    const int predicted = stage_predict(st, N, t0, h);
+    // Every particle in the classical form (no variations, no velocity-
+    // dependent force): unless this is a retry, the solve's two-body
+    // predictor draws the whole first iterate, and the extrapolated stages
+    // and their round would be overwritten unread.
+    int classical = (nv == 0) && !r->force_is_velocity_dependent;
+    for (size_t i=0; classical && i<N; i++){
+        classical = st->stage_fit[i].classical;
+    }
+    const int predicted = stage_predict(st, N, t0, h, classical);
     // The classical form's h w_j: the same products in every round and in
     // the update, so that the doubles' step is the IIIA-IIIB pair exactly.
     double hb[PFVI_STAGES_MAX];
@@ -797,8 +874,10 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
     }
 
     // The first iterate: one round from the predicted accelerations.
-    stage_rounds(st, N, h);
-    pfvi_solve_swap(st);
+    if (!classical || predicted == PFVI_PREDICTED_RETRY){
+        stage_rounds(st, N, h);
+        pfvi_solve_swap(st);
+    }
     st->var_solve_change = INFINITY;
     st->var_solve_previous = INFINITY;
     const enum pfvi_trial solved = pfvi_solve_stages(r, st, N, t0, h, &stage_solve_ops, predicted);

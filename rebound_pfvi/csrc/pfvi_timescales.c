@@ -43,6 +43,7 @@
  * (pfvi_largest_pull2).
  */
 #include <math.h>
+#include <string.h>
 #include "pfvi.h"
 
 // Whether body i attracts others in REBOUND's sum: an active body with mass.
@@ -50,6 +51,65 @@ static inline int attracts(const struct reb_particle* p, size_t i, size_t n_attr
     return i < n_attracting && p[i].m > 0.;
 }
 
+// The positions of bodies j0 .. j0 + 3 as lanes (lanes past n repeat the
+// first: finite values, computed and dropped).
+struct lanes_block {
+    pfvi_lanes x, y, z, vx, vy, vz, m;
+};
+
+static inline __attribute__((always_inline)) void block_of(const struct reb_particle* p, size_t j0, size_t n, struct lanes_block* b){
+    double v[7][4];
+    for (size_t l=0; l<4; l++){
+        const struct reb_particle* const q = &p[j0 + ((l < n) ? l : 0)];
+        v[0][l] = q->x; v[1][l] = q->y; v[2][l] = q->z;
+        v[3][l] = q->vx; v[4][l] = q->vy; v[5][l] = q->vz; v[6][l] = q->m;
+    }
+    memcpy(&b->x, v[0], sizeof(b->x)); memcpy(&b->y, v[1], sizeof(b->y)); memcpy(&b->z, v[2], sizeof(b->z));
+    memcpy(&b->vx, v[3], sizeof(b->vx)); memcpy(&b->vy, v[4], sizeof(b->vy)); memcpy(&b->vz, v[5], sizeof(b->vz));
+    memcpy(&b->m, v[6], sizeof(b->m));
+}
+
+#define lanes_of(x) ((pfvi_lanes){(x), (x), (x), (x)})
+
+// Without ghost boxes: the pairs' stiffnesses four at a time in vector lanes
+// (each lane the scalar expression), then compared in the scalar loop's order.
+static inline __attribute__((always_inline)) void partner_search_lanes(const struct reb_particle* p, size_t N, const struct pfvi_field* f,
+        size_t n_attracting, struct pfvi_partner* out){
+    const struct reb_vec6d* const s = &f->images[0];
+    const pfvi_lanes sx = lanes_of(s->x), sy = lanes_of(s->y), sz = lanes_of(s->z), soft = lanes_of(f->softening2);
+    for (size_t i=0; i<N; i++){
+        const int i_attracts = attracts(p, i, n_attracting);
+        const size_t before = (i < n_attracting) ? i : n_attracting;
+        const pfvi_lanes xi = lanes_of(p[i].x), yi = lanes_of(p[i].y), zi = lanes_of(p[i].z), mi = lanes_of(p[i].m);
+        for (size_t j0=0; j0<before; j0+=4){
+            const size_t n = (before - j0 < 4) ? before - j0 : 4;
+            struct lanes_block b;
+            block_of(p, j0, n, &b);
+            const pfvi_lanes dx = (b.x + sx) - xi, dy = (b.y + sy) - yi, dz = (b.z + sz) - zi;
+            const pfvi_lanes r2 = (dx*dx + dy*dy + dz*dz) + soft;
+            pfvi_lanes root;
+            for (int l=0; l<4; l++){
+                root[l] = sqrt(r2[l]);
+            }
+            const pfvi_lanes stiffness = (mi + b.m)/(r2*root);
+            for (size_t l=0; l<n; l++){
+                const size_t j = j0 + l;
+                const int j_attracts = (p[j].m > 0.);
+                if (!(i_attracts || j_attracts)){
+                    continue;
+                }
+                if (j_attracts && stiffness[l] > out[i].stiffness){
+                    out[i] = (struct pfvi_partner){j, 0, stiffness[l]};
+                }
+                if (i_attracts && stiffness[l] > out[j].stiffness){
+                    out[j] = (struct pfvi_partner){i, 0, stiffness[l]};
+                }
+            }
+        }
+    }
+}
+
+PFVI_VECTOR_CLONES
 void pfvi_partner_search(const struct reb_particle* p, size_t N, const struct pfvi_field* f,
         struct pfvi_partner* out){
     const size_t n_attracting = (f->N_active < N) ? f->N_active : N;
@@ -60,6 +120,10 @@ void pfvi_partner_search(const struct reb_particle* p, size_t N, const struct pf
         return;
     }
     const size_t n_images = f->n_images;
+    if (n_images == 1){
+        partner_search_lanes(p, N, f, n_attracting, out);
+        return;
+    }
     // A pair's stiffness (m_i + m_j)/r^3 is the same for both bodies, so each
     // pair (and image) is measured once, when the outer loop reaches the
     // later body of the two. Each body still meets its candidates in
@@ -410,6 +474,36 @@ static void encounter_term(const double d[3], const double w[3], const double b[
     }
 }
 
+#define PFVI_PREFILTER_N_MIN 32
+
+// encounter_term's two early tests (bound; below `negligible`) for the
+// pairs (i, j0 .. j0 + 3) without ghost boxes, in vector lanes, each lane
+// the scalar expressions: pass[l] = 0 where encounter_term would return
+// before its first effect. The sum's largest term only grows within a scan,
+// so a pair failing at this `negligible` fails at the later one too; the
+// pairs passing are tested again by encounter_term itself.
+static inline __attribute__((always_inline)) void encounter_prefilter(const struct reb_particle* p, size_t i,
+        size_t j0, size_t n, const struct pfvi_field* f, double negligible, int pass[4]){
+    struct lanes_block b;
+    block_of(p, j0, (n < 4) ? n : 4, &b);
+    const struct reb_vec6d* const sh = &f->images[0];
+    const pfvi_lanes d0 = (b.x + lanes_of(sh->x)) - lanes_of(p[i].x), d1 = (b.y + lanes_of(sh->y)) - lanes_of(p[i].y),
+        d2 = (b.z + lanes_of(sh->z)) - lanes_of(p[i].z);
+    const pfvi_lanes w0 = (b.vx + lanes_of(sh->vx)) - lanes_of(p[i].vx),
+        w1 = (b.vy + lanes_of(sh->vy)) - lanes_of(p[i].vy), w2 = (b.vz + lanes_of(sh->vz)) - lanes_of(p[i].vz);
+    const pfvi_lanes mu = lanes_of(f->G)*(lanes_of(p[i].m) + b.m);
+    const pfvi_lanes rs2 = (d0*d0 + d1*d1 + d2*d2) + lanes_of(f->softening2);
+    const pfvi_lanes v2 = w0*w0 + w1*w1 + w2*w2;
+    const pfvi_lanes bound_lhs = v2*v2*rs2, bound_rhs = lanes_of(4.)*mu*mu;
+    const pfvi_lanes P = d0*w0 + d1*w1 + d2*w2;
+    const pfvi_lanes C = P*P/(v2*rs2);
+    const pfvi_lanes boost = lanes_of(1.) + lanes_of(PFVI_ENCOUNTER_APPROACH)*C;
+    const pfvi_lanes near_lhs = v2*boost*boost, near_rhs = lanes_of(negligible)*lanes_of(negligible)*rs2;
+    for (int l=0; l<4; l++){
+        pass[l] = (bound_lhs[l] > bound_rhs[l]) && (near_lhs[l] > near_rhs[l]);
+    }
+}
+
 // gamma_s of the Kepler terms' eccentricity factor: at a fixed kappa the
 // error per orbit grows like (1 - e)^(-beta_s) (measured); the factor
 // (1 - e^2)^(-beta_s/(2s - 2)) evens it out.
@@ -418,6 +512,7 @@ static double eccentricity_exponent(int s){
     return beta[s]/(2.*s - 2.);
 }
 
+PFVI_VECTOR_CLONES
 int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state* start, size_t N,
         const struct pfvi_field* f, int s, struct pfvi_partner* partners, double* sigma, double* dlog_sigma){
     const double gamma = eccentricity_exponent(s);
@@ -451,12 +546,19 @@ int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state*
             partner_pulls(p, N, f, partners);
         }
         const size_t n_attracting = (f->N_active < N) ? f->N_active : N;
+        // (It pays where most pairs are negligible: in large systems. In a few
+        // bodies most pass, and the test would only be made twice.)
+        const int lanes = (f->n_images == 1 && N >= PFVI_PREFILTER_N_MIN);
         for (size_t i=0; i<N; i++){
             const int i_attracts = attracts(p, i, n_attracting);
             const size_t before = (i < n_attracting) ? i : n_attracting;
             const double* const ai = acceleration_of(p, start, i);
+            int pass[4] = {1, 1, 1, 1};
             for (size_t j=0; j<before; j++){
-                if (!(i_attracts || p[j].m > 0.)){
+                if (lanes && j % 4 == 0){
+                    encounter_prefilter(p, i, j, before - j, f, PFVI_DENSITY_NEGLIGIBLE*sum.largest, pass);
+                }
+                if (!(i_attracts || p[j].m > 0.) || !pass[j % 4]){
                     continue;
                 }
                 const double* const aj = acceleration_of(p, start, j);

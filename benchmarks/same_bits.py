@@ -1,0 +1,145 @@
+"""Whether this build and another (--baseline) give the same bits: a set of
+runs as users make them (pages' scenes, flybys, retrograde crossings,
+binaries with planets, test particles of both types, softening, every s and
+fitting, outputs, a reversal, contacts, MEGNO), each run by both builds in
+child processes; prints each run's verdict (same bits, or the largest
+coordinate difference) and the count.
+
+    python -P benchmarks/same_bits.py --baseline "PYTHONPATH=<other build> python3"
+
+For a change meant to leave every trajectory as it was (a faster path to
+the same arithmetic), every line must say "same bits".
+"""
+import argparse
+import hashlib
+import json
+import shlex
+import subprocess
+import sys
+
+CHILD = r"""
+import json, math, sys
+import rebound, rebound_pfvi
+from rebound_pfvi import scenes
+name = sys.argv[1]
+
+def planets(sim, inc=0.2):
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=0.3, inc=0.05, f=0.4)
+    sim.add(m=3e-4, a=2.1, e=0.25, inc=inc, f=2.5)
+
+sim = rebound.Simulation()
+times = [None]
+if name.startswith("scene:"):
+    scene = scenes.make(name.split(":")[1])
+    sim = scene.build()
+    times = [scene.t_end]
+elif name.startswith("kepler-e"):
+    e, f = (float(x) for x in name[8:].split("-f"))
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=e, f=f)
+    times = [30.0]
+elif name.startswith("retrograde-i"):
+    planets(sim)
+    sim.add(m=0.0, a=0.6, e=0.2, inc=float(name[12:]), f=1.0)
+    times = [40.0]
+elif name == "flyby":
+    planets(sim)
+    sim.add(m=0.2, x=-30.0, y=0.7, z=0.1, vx=2.5)
+    times = [25.0]
+elif name == "binary-planet":
+    sim.add(m=1.0)
+    sim.add(m=0.4, a=0.15, e=0.4)
+    sim.add(m=1e-3, a=1.5, e=0.1, inc=0.3, primary=None)
+    times = [30.0]
+elif name.startswith("testparticles-type"):
+    planets(sim)
+    for k in range(4):
+        sim.add(m=1e-8, a=0.5 + 0.7 * k, e=0.5, inc=0.9 * k, f=k)
+    sim.N_active = 3
+    sim.testparticle_type = int(name[-1])
+    sim.testparticle_hidewarnings = 1
+    times = [20.0]
+elif name == "softened":
+    sim.softening = 0.02
+    planets(sim)
+    times = [20.0]
+elif name.startswith("stages"):
+    s, fitting = name[6:].split("-")
+    planets(sim)
+    times = [15.0]
+elif name == "outputs":
+    planets(sim)
+    times = [0.37 * k for k in range(1, 80)]
+elif name == "reversal":
+    planets(sim)
+    times = [20.0, "flip", 0.0]
+elif name == "contacts":
+    planets(sim)
+    sim.add(m=1e-6, a=1.0, e=0.0, f=0.9, r=1e-3)
+    sim.particles[1].r = 5e-3
+    sim.collision = "direct"
+    sim.collision_resolve = "merge"
+    times = [60.0]
+elif name == "megno":
+    planets(sim)
+    times = ["megno", 20.0]
+sim.move_to_com()
+sim.integrator = "pfvi"
+if name.startswith("stages"):
+    sim.integrator.stages = int(s)
+    sim.integrator.fitting = fitting
+for t in times:
+    if t is None:
+        continue
+    if t == "flip":
+        sim.dt *= -1
+    elif t == "megno":
+        sim.init_megno(seed=1)  # (its deviation vectors are random otherwise)
+    else:
+        sim.integrate(t)
+state = [[p.x, p.y, p.z, p.vx, p.vy, p.vz, p.m] for p in sim.particles] + [[sim.t, sim.integrator.n_steps]]
+if name == "megno":
+    state.append([sim.megno()])
+print(json.dumps(state))
+"""
+
+RUNS = (["scene:" + s for s in ("kepler", "comet", "triple", "jupiter-comet", "retrograde", "sungrazer",
+                                "circumbinary", "outer-solar-system", "periodic-box")]
+        + [f"kepler-e{e}-f{f}" for e in (0.0, 0.3, 0.6, 0.9, 0.97) for f in (0.0, 3.14159)]
+        + [f"retrograde-i{i}" for i in (0.0, 1.2, 1.9, 2.6, 3.14159)]
+        + ["flyby", "binary-planet", "testparticles-type0", "testparticles-type1", "softened"]
+        + [f"stages{s}-{f}" for s in (3, 4, 6, 8) for f in ("none", "phase", "exact")]
+        + ["outputs", "reversal", "contacts", "megno"])
+
+
+def run(prefix, name):
+    out = subprocess.run(["env"] + prefix + ["-P", "-c", CHILD, name], capture_output=True, text=True)
+    if out.returncode != 0:
+        return {"error": out.stderr.strip().splitlines()[-1] if out.stderr.strip() else "failed"}
+    return json.loads(out.stdout)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--baseline", required=True)
+    args = parser.parse_args()
+    same = 0
+    for name in RUNS:
+        a, b = run([sys.executable], name), run(shlex.split(args.baseline), name)
+        if a == b:
+            same += 1
+            digest = hashlib.sha1(json.dumps(a).encode()).hexdigest()[:10]
+            print(f"{name}: same bits ({digest})")
+        elif isinstance(a, dict) or isinstance(b, dict):
+            print(f"{name}: DIFFERENT (this: {a if isinstance(a, dict) else 'ran'}; baseline: "
+                  f"{b if isinstance(b, dict) else 'ran'})")
+        else:
+            diff = max(abs(x - y) for ra, rb in zip(a, b) for x, y in zip(ra, rb))
+            print(f"{name}: DIFFERENT (largest difference {diff:.3g})")
+    print(f"{same} of {len(RUNS)} runs give the same bits")
+    return 0 if same == len(RUNS) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,113 @@
+/**
+ * pfvi_gravity.c: REBOUND's basic gravity at every stage of a round in one
+ * pass over the pairs.
+ *
+ * A round needs the forces at s - 1 stage points. Through REBOUND that is
+ * s - 1 trips: the stage positions written into r->particles, REBOUND's
+ * reb_simulation_update_acceleration, the accelerations read back, and for
+ * each trip the ghost box looked up and every particle's acceleration
+ * zeroed (docs/performance.md: at N = 2 and 3 the trips cost more than the
+ * gravity). Here the pairs are the outer loops and the stages the inner one,
+ * over pfvi's own stage arrays.
+ *
+ * The arithmetic is REBOUND's reb_gravity_basic_calculate_acceleration
+ * (src/gravity.c, the same in 5.0 to 5.2, built without OpenMP) operation
+ * for operation: the image shift added to particle i's coordinate, the
+ * softened distance, G/r^3, the same pairs (i from 1, j < i, among the
+ * N_active; then each test particle against the active ones, pulling them
+ * with testparticle_type 1) in the same order. Each stage's sums therefore
+ * add the same terms in the same order as REBOUND's: the accelerations are
+ * bit for bit REBOUND's, and so is every trajectory (tests/test_gravity.py
+ * compares them with the REBOUND path forced).
+ *
+ * Used only where REBOUND's routine would compute nothing else
+ * (pfvi_gravity_own): basic gravity, no additional forces (REBOUNDx
+ * included), no variational particles, no ghost boxes, no ignored terms.
+ * Everything else goes through REBOUND as before.
+ */
+#include <math.h>
+#include "pfvi.h"
+#include "boundary.h"
+
+int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
+    return r->gravity == REB_GRAVITY_BASIC && r->additional_forces == NULL && r->N_var == 0 && st->var_N == 0
+        && r->gravity_ignore_terms == 0 && r->N_ghost_x == 0 && r->N_ghost_y == 0 && r->N_ghost_z == 0
+        && (r->N_active == SIZE_MAX || r->N_active <= N);
+}
+
+#define LANES PFVI_STAGES_MAX
+
+// The pair (i, j)'s terms in every lane, as REBOUND's loop body; with
+// pull_j = 0 (a test particle i of type 0) j feels nothing. The lanes are
+// independent, so the compiler vectorises them (SSE2's packed square root
+// and division round as the scalar ones do: the same bits).
+static inline __attribute__((always_inline)) void pair_terms(const double (*restrict xi)[LANES],
+        const double (*restrict xj)[LANES], double (*restrict ai)[LANES], double (*restrict aj)[LANES],
+        double mi, double mj, double G, double softening2, const double g[3], int pull_j){
+    for (int l=0; l<LANES; l++){
+        const double dx = (g[0] + xi[0][l]) - xj[0][l];
+        const double dy = (g[1] + xi[1][l]) - xj[1][l];
+        const double dz = (g[2] + xi[2][l]) - xj[2][l];
+        const double _r = sqrt(dx*dx + dy*dy + dz*dz + softening2);
+        const double prefact = G/(_r*_r*_r);
+        const double prefactj = -prefact*mj;
+        ai[0][l] += prefactj*dx;
+        ai[1][l] += prefactj*dy;
+        ai[2][l] += prefactj*dz;
+        if (pull_j){
+            const double prefacti = prefact*mi;
+            aj[0][l] += prefacti*dx;
+            aj[1][l] += prefacti*dy;
+            aj[2][l] += prefacti*dz;
+        }
+    }
+}
+
+// Compiled twice, for AVX2 (4 lanes a vector) and for any x86-64 (SSE2, 2),
+// chosen by the processor at load time; elsewhere once. No FMA either way.
+PFVI_VECTOR_CLONES
+void pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
+        const double (*x)[PFVI_STAGES_MAX][3], double (*a)[PFVI_STAGES_MAX][3], int k0, int k1){
+    const struct reb_particle* const ps = r->particles;
+    const double G = r->G;
+    const double softening2 = r->softening*r->softening;
+    const size_t N_active = (r->N_active == SIZE_MAX) ? N : r->N_active;
+    // REBOUND's one ghost box (0, 0, 0) when there are none: a shift of
+    // zero, added all the same (its sign of zero included).
+    const struct reb_vec6d box = reb_boundary_get_ghostbox((struct reb_simulation*)r, 0, 0, 0);
+    const double g[3] = {box.x, box.y, box.z};
+    double (*restrict X)[3][LANES] = st->gravity_x;
+    double (*restrict A)[3][LANES] = st->gravity_a;
+    // Lane l holds stage l; lanes outside k0 .. k1 repeat the nearest
+    // stage (finite values, computed and dropped).
+    for (size_t i=0; i<N; i++){
+        for (int c=0; c<3; c++){
+            for (int l=0; l<LANES; l++){
+                const int k = (l < k0) ? k0 : (l > k1) ? k1 : l;
+                X[i][c][l] = x[i][k][c];
+                A[i][c][l] = 0.;
+            }
+        }
+    }
+    for (size_t i=1; i<N_active; i++){
+        for (size_t j=0; j<i; j++){
+            pair_terms(X[i], X[j], A[i], A[j], ps[i].m, ps[j].m, G, softening2, g, 1);
+        }
+    }
+    const size_t first_test = (N_active > 1) ? N_active : 1;
+    const int pull = r->testparticle_type;
+    for (size_t i=first_test; i<N; i++){
+        for (size_t j=0; j<N_active; j++){
+            if (pull){
+                pair_terms(X[i], X[j], A[i], A[j], ps[i].m, ps[j].m, G, softening2, g, 1);
+            }else{
+                pair_terms(X[i], X[j], A[i], A[j], ps[i].m, ps[j].m, G, softening2, g, 0);
+            }
+        }
+    }
+    for (size_t i=0; i<N; i++){
+        for (int k=k0; k<=k1; k++){
+            a[i][k][0] = A[i][0][k]; a[i][k][1] = A[i][1][k]; a[i][k][2] = A[i][2][k];
+        }
+    }
+}
