@@ -957,8 +957,8 @@ struct pfvi_state {
     // takes its whole interval instead and the simulation shows the state
     // at the requested time from an output step (a trial from the step's
     // end, never committed). The run's own state is kept here and taken up
-    // again by the next step if nothing was edited. All but output_uncapped
-    // and output_failed_t are saved in archives.
+    // again by the next step if nothing was edited. All but output_uncapped,
+    // output_cut and output_failed_t are saved in archives.
     struct pfvi_output_particle* output_real;   // the run's state at output_t_real
     struct pfvi_output_particle* output_shown;  // what the simulation was given at output_t
     size_t output_N;               // >0: an output is shown (the number of particles)
@@ -973,6 +973,8 @@ struct pfvi_state {
     double output_last_t0;         // the last real step went from output_last_t0 to output_last_t1
     double output_last_t1;
     int output_uncapped;           // set by the glue: the symmetric control takes the whole interval
+    int output_cut;                // set by the glue: hooks need REBOUND's own outputs, so sim.dt caps
+                                   // every step (none may pass a time REBOUND asks to finish on)
     int output_taken_up;           // set by the glue: the step starts from the run's state, its force kept
     double output_failed_t;        // an output step from the state at this t did not converge
     // MEGNO's stage velocities: w_k = w_0 + h sum_j collocation[k][j] a_j,
@@ -1197,8 +1199,12 @@ PFVI_INTERNAL int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_st
 /* ---------------------------------------------------------------- outputs */
 
 // pfvi_output.c: outputs that leave the run's steps as they are.
+// Whether no hook is set that an output step cannot keep consistent (ODEs,
+// pre- or post-timestep modifications).
+PFVI_INTERNAL int pfvi_output_hooks_kept(const struct reb_simulation* r);
 // Whether this step may take its whole interval and show an output instead
-// of a step cut short (symmetric control, epsilon > 0, fitting 'none').
+// of a step cut short (symmetric control, epsilon > 0, fitting 'none', the
+// hooks kept).
 PFVI_INTERNAL int pfvi_output_eligible(const struct reb_simulation* r, const struct pfvi_state* st);
 // Whether the simulation still shows the kept output, unedited: N, N_var, t,
 // every position, velocity and mass (variational ones too), stages, epsilon

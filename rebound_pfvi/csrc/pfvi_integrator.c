@@ -229,6 +229,12 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "as after any edit. Changes pfvi cannot see (a callback's own variables, REBOUNDx parameters) "
       "made between outputs act from the run's next step, which may start past the output. MEGNO's "
       "Y is the output's; <Y> and the Lyapunov exponent are sampled at the run's steps. "
+      "Hooks an output step cannot keep consistent with the state it shows fall back to steps cut "
+      "at the requested times, as REBOUND's other integrators do: with ODEs (sim.create_ode, "
+      "REBOUNDx's tides_spin among them) or pre- or post-timestep modifications (REBOUNDx operators "
+      "among them) set, the step ends on each requested time, the ODEs are integrated and the "
+      "modifications fired over exactly the time the state shown has lived (dt_last_done), and the "
+      "run's steps depend on the output times. "
       "exact_finish_time = 0, fixed steps (epsilon = 0) and fittings other than 'none' are as "
       "before: sim.dt is the step proposed after each step; a different value (REBOUND finishing on "
       "time where outputs are not shown, the user) caps the step "
@@ -371,7 +377,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         REB_UINT64, n_solve_halved),
     PFVI_STATISTIC("output steps: states shown at a time REBOUND asked to finish on (integrate(t) with "
         "exact_finish_time = 1) that the step passed, each a trial step from the step's end back to "
-        "that time, never committed (see step_control). Not counted in n_steps or n_attempts; their "
+        "that time, never committed (see step_control; none while ODEs or pre- or post-timestep "
+        "modifications are set: the step is cut at the time instead). Not counted in n_steps or n_attempts; their "
         "force evaluations are in n_force_evaluations.",
         REB_UINT64, n_outputs),
     PFVI_STATISTIC("steps retaken to end at a contact inside them: with collisions on (sim.collision not "
@@ -932,8 +939,10 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
     // With collisions and radii, or exit_min_distance: retaken to end at the
     // first contact its path shows (pfvi_contact.c).
     st->output_uncapped = dense;
+    st->output_cut = r->exact_finish_time == 1 && !pfvi_output_hooks_kept(r);
     const double h = contact ? pfvi_contact_step(r, st, N, t0, pfvi_take) : pfvi_take(r, st, N, t0);
     st->output_uncapped = 0;
+    st->output_cut = 0;
     if (h == 0.){
         pfvi_report(r, st);
         if (shown && r->t == t0){
