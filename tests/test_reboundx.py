@@ -121,3 +121,56 @@ def test_counting_wrapper_leaves_the_run_bit_identical_reboundx():
         runs.append([(p.x, p.y, p.vx, p.vy) for p in sim.particles])
     assert runs[0] == runs[1]
     assert counter[0] == sim.integrator.n_force_evaluations > 0
+
+
+# REBOUNDx operators (issue 40, item 2): rx.add_operator(op) places an
+# operator for "pfvi" as for IAS15 (after the step, the whole dt: rebound_pfvi
+# wraps REBOUNDx's add_operator), and the operators act over exactly the time
+# each output's state lived (docs/outputs.md). Before, REBOUNDx added nothing
+# for "pfvi": a stayed 1.000000.
+def _operator_run(integrator, name, outputs):
+    import rebound
+    reboundx = pytest.importorskip("reboundx")
+    sim = rebound.Simulation()
+    sim.integrator = integrator
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0)
+    sim.move_to_com()
+    rx = reboundx.Extras(sim)
+    op = rx.load_operator(name)
+    rx.add_operator(op)
+    if name == "modify_orbits_direct":
+        sim.particles[1].params["tau_a"] = -1e3
+    else:
+        sim.particles[0].params["tau_mass"] = -1e3
+    for k in range(outputs):
+        sim.integrate(500.0 * (k + 1) / outputs)
+    assert sim.t == pytest.approx(500.0, rel=1e-12, abs=0)
+    return sim.particles[1].a if name == "modify_orbits_direct" else sim.particles[0].m
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # REBOUNDx's "do not change the integrator"
+@pytest.mark.parametrize("outputs", [1, 40, 700])
+@pytest.mark.parametrize("name, bound", [("modify_orbits_direct", 3e-4), ("modify_mass", 8e-4)])
+def test_reboundx_operators_land_after_the_step_at_outputs(name, bound, outputs):
+    # exp(-500/1e3) for both; the operators are split from the step (first
+    # order in it): IAS15's thousands of steps measured 3.1e-5 and 7.5e-5 off,
+    # pfvi's fewer steps 1.6e-4 and 3.9e-4 (benchmarks/reboundx_operators.py).
+    exact = math.exp(-0.5)
+    ias15 = _operator_run("ias15", name, outputs)
+    pfvi = _operator_run("pfvi", name, outputs)
+    assert abs(ias15 - exact) / exact < 1e-4
+    assert abs(pfvi - exact) / exact < bound
+
+
+def test_reboundx_add_operator_keeps_explicit_placements_and_recorders():
+    import rebound
+    reboundx = pytest.importorskip("reboundx")
+    assert getattr(reboundx.Extras.add_operator, "_pfvi", False)
+    sim = rebound.Simulation()
+    sim.integrator = "pfvi"
+    rx = reboundx.Extras(sim)
+    rx.add_operator(rx.load_operator("track_min_distance"))  # REBOUNDx's own: once after the step
+    assert bool(rx._post_timestep_modifications) and not rx._pre_timestep_modifications
+    rx.add_operator(rx.load_operator("modify_mass"), dtfraction=0.5, timing="pre")  # as asked
+    assert bool(rx._pre_timestep_modifications)
