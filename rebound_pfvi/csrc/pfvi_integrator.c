@@ -859,8 +859,21 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
     const int finishing = (st->status_at_start == REB_STATUS_LAST_STEP);
     const int eligible = pfvi_output_eligible(r, st);
     const int shown = eligible && pfvi_output_is_shown(r, st);
-    // (Compared only where an output may be shown from the last step's end.)
-    const int at_end = shown || (eligible && finishing && pfvi_state_is_end(r, st));
+    // (Compared only where an output may be shown from the last step's end.
+    // A simulation loaded from an archive or copied keeps no end state: it
+    // is at the last step's end if t is where that step ended, as REBOUND
+    // snapshots it between that step and the call that shows the output.)
+    const int loaded_end = eligible && finishing && st->end_N == 0 && st->output_last_t1 != st->output_last_t0
+        && r->t == st->output_last_t1;
+    const int at_end = shown || (eligible && finishing && (loaded_end || pfvi_state_is_end(r, st)));
+    if (eligible && !finishing && !shown && st->end_N == 0 && st->dt_proposed != 0. && r->dt != 0.
+            && st->output_last_t1 != st->output_last_t0 && r->t == st->output_last_t1
+            && fabs(r->dt) != fabs(st->dt_proposed)){
+        // Such a snapshot holds as sim.dt the cut REBOUND made to finish on
+        // the next output (it writes it after deciding to finish, before the
+        // call that does); the run would have gone on with its proposal.
+        r->dt = copysign(st->dt_proposed, r->dt);
+    }
     // The time REBOUND may see next (the proposal, as after a step; a value
     // of its own would cap the next step).
     const double proposed = (st->dt_proposed != 0.) ? st->dt_proposed : dt_entry;
