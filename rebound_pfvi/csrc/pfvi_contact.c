@@ -568,7 +568,12 @@ double pfvi_contact_step(struct reb_simulation* r, struct pfvi_state* st, size_t
     snapshot_restore(r, st, &before);
     memcpy(st->compensation, st->contact_compensation, N*sizeof(*st->compensation));
     r->dt = cap;
+    // (The retake ends at the contact even where the step would take its
+    // whole interval past an output: the output is shown from its end.)
+    const int uncapped = st->output_uncapped;
+    st->output_uncapped = 0;
     const double h_contact = take(r, st, N, t0);
+    st->output_uncapped = uncapped;
     if (h_contact == 0.){
         return 0.;
     }

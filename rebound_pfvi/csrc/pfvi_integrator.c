@@ -387,7 +387,9 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "polynomial through its stages (positions and accelerations at its nodes, velocities at its "
         "ends; candidate pairs by a bound from each body's nodes); the step is retaken to end there, "
         PFVI_STR(PFVI_CONTACT_DEPTH) " of the limit inside it (at most half the dip), so that REBOUND's "
-        "collision search and resolve and its Encounter see the contact at the step's end. Included in "
+        "collision search and resolve and its Encounter see the contact at the step's end. Outputs do "
+        "not cut the searched steps: an output before the contact is shown from the retaken step, and "
+        "REBOUND sees the contact once an output reaches it, as in a single call. Included in "
         "n_rejected and n_asymmetric; the steps are not time-symmetric (rebound_pfvi's docs, collisions).",
         REB_UINT64, n_contact_steps),
     PFVI_STATISTIC("steps kept past a contact their path showed, because " PFVI_STR(PFVI_CONTACT_RETAKES)
@@ -904,11 +906,12 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
         }
         return;
     }
-    // (With a contact search (pfvi_contact.c) the steps end where REBOUND
-    // asks, as before outputs were shown: a contact inside a step that passed
-    // the output would otherwise be searched from a state the run never had.)
+    // (A contact search (pfvi_contact.c) searches the run's own steps: a
+    // step retaken to end at a contact past the output shows the output from
+    // there, and REBOUND's collision search and Encounter see the contact
+    // when an output reaches it.)
     const int contact = pfvi_contact_enabled(r);
-    int dense = eligible && (finishing || shown) && st->options.epsilon > 0. && st->density_sigma > 0. && !contact;
+    int dense = eligible && (finishing || shown) && st->options.epsilon > 0. && st->density_sigma > 0.;
     if (dense && finishing){
         // The last step went from output_last_t0 to t0 (its end unedited):
         // a time inside it is shown from here, with no step of the run.
