@@ -314,6 +314,11 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // step's error of the limit), the steps are kept as taken until no contact is
 // predicted (n_contact_kept).
 #define PFVI_CONTACT_RETAKES 4
+// sim.collision 'line' and 'linetree': REBOUND searches straight segments
+// drawn back from each step's end over dt_last_done, which pfvi's long curved
+// steps do not follow. A step whose segments meet where its path does not is
+// retaken at half its length, at most this many times, until they agree:
+#define PFVI_CONTACT_LINE_HALVINGS 40
 
 
 /* ---------------------------------------------------- quadrature (lobatto) */
@@ -1236,6 +1241,8 @@ PFVI_INTERNAL double pfvi_controlled_step(struct reb_simulation* r, struct pfvi_
 // pfvi_contact.c: whether a step must be searched for contacts (collisions
 // on with a radius set, or exit_min_distance set; O(N) only with collisions on).
 PFVI_INTERNAL int pfvi_contact_enabled(const struct reb_simulation* r);
+// Whether REBOUND's collision search draws straight segments over the step ('line', 'linetree').
+PFVI_INTERNAL int pfvi_contact_line(const struct reb_simulation* r);
 // Takes one step with `take` (the fixed or controlled step) and, if the
 // step's path shows a contact before its end, retakes it to end there
 // (rolled back, the controller as before the step, the step capped by

@@ -389,7 +389,12 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         PFVI_STR(PFVI_CONTACT_DEPTH) " of the limit inside it (at most half the dip), so that REBOUND's "
         "collision search and resolve and its Encounter see the contact at the step's end. Outputs do "
         "not cut the searched steps: an output before the contact is shown from the retaken step, and "
-        "REBOUND sees the contact once an output reaches it, as in a single call. Included in "
+        "REBOUND sees the contact once an output reaches it, as in a single call. With sim.collision "
+        "'line' or 'linetree' (REBOUND's straight segments drawn back from each step's end over "
+        "dt_last_done, which a curved step does not follow) a step whose segments come within the radii "
+        "where its path does not is retaken at half its length until they agree (at most "
+        PFVI_STR(PFVI_CONTACT_LINE_HALVINGS) " times), and a call that shows an output reports "
+        "dt_last_done = 0, so that REBOUND looks at the state shown. Included in "
         "n_rejected and n_asymmetric; the steps are not time-symmetric (rebound_pfvi's docs, collisions).",
         REB_UINT64, n_contact_steps),
     PFVI_STATISTIC("steps kept past a contact their path showed, because " PFVI_STR(PFVI_CONTACT_RETAKES)
@@ -808,6 +813,15 @@ static double pfvi_take(struct reb_simulation* r, struct pfvi_state* st, size_t 
     return (st->options.epsilon == 0.) ? pfvi_fixed_step(r, st, N, t0) : pfvi_controlled_step(r, st, N, t0);
 }
 
+// The dt_last_done a call that shows an output reports: the run's proposal
+// (so that REBOUND, restoring sim.dt after integrate(), restores it), or 0
+// with 'line'/'linetree' collisions and radii, so that REBOUND's search looks
+// at the state shown, not along a segment drawn back from it over a step it
+// did not take (the run's steps are searched along their paths).
+static double pfvi_shown_dt_done(const struct reb_simulation* r, double proposed){
+    return (pfvi_contact_line(r) && pfvi_contact_enabled(r)) ? 0. : proposed;
+}
+
 static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
     if (!pfvi_options_valid(r, &st->settings)){
         return;
@@ -887,7 +901,7 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
             // going there is the step (REBOUND does not know where the next
             // output is: a time it passed is shown from there).
             r->dt = proposed;
-            r->dt_last_done = proposed;
+            r->dt_last_done = pfvi_shown_dt_done(r, proposed);
             st->output_N = 0;
             return;
         }
@@ -930,7 +944,7 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
                     st->density_dlog = density_dlog;
                 }
                 r->dt = proposed;
-                r->dt_last_done = proposed;
+                r->dt_last_done = pfvi_shown_dt_done(r, proposed);
                 return;
             }
             if (trial == PFVI_TRIAL_ERROR){
@@ -1005,6 +1019,8 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
         r->dt = proposed;
         if (trial != PFVI_TRIAL_OK){
             st->output_N = 0;  // the run's state, at the step's end, is the simulation's
+        }else{
+            r->dt_last_done = pfvi_shown_dt_done(r, h);
         }
         if (trial == PFVI_TRIAL_ERROR){
             pfvi_report(r, st);
