@@ -414,3 +414,48 @@ def test_line_collisions_follow_pfvis_path_against_ias15_closest_approach():
 def test_line_collisions_follow_pfvis_path_over_120_planet_pairs():
     # 20 of 120 touch; before, 2 more merged (at 1.14 and 4.07 times the radii).
     assert _line_pairs(range(120)) == []
+
+
+def _slow_contact(mode):
+    """Two small planets 0.01 apart in a, drifting into contact inside one of
+    pfvi's long steps (0.85 time units) at t = 10.599."""
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-6, a=1.0, f=0.0, r=0.03)
+    sim.add(m=1e-6, a=1.01, f=0.2, r=0.03)
+    sim.move_to_com()
+    sim.integrator = "pfvi"
+    if mode == "exit":
+        sim.exit_min_distance = 0.06
+    else:
+        sim.collision = "direct"
+        sim.collision_resolve = "merge"
+    return sim
+
+
+def _slow_contact_run(mode, times):
+    sim = _slow_contact(mode)
+    try:
+        for t in times:
+            sim.integrate(t)
+    except rebound.Encounter:
+        pass
+    return sim.t, sim.N, [(p.x, p.y, p.vx, p.vy, p.m) for p in sim.particles]
+
+
+@pytest.mark.parametrize("mode", ["exit", "merge"])
+def test_a_contact_between_two_outputs_is_seen_where_the_single_call_sees_it(mode):
+    # The run's step is retaken to end at the contact, and an output before
+    # it is shown from there; the next call, asked for a time past the
+    # contact, first gives REBOUND the contact's state (before: the state at
+    # the next output, 10.899 for the Encounter instead of 10.599, and a
+    # merger there or none).
+    t_end = 11.6
+    one = _slow_contact_run(mode, [t_end])
+    if mode == "exit":
+        assert one[0] == pytest.approx(10.5991, abs=1e-4) and one[1] == 3
+    else:
+        assert one[1] == 2
+    for a in (9.9, 10.3, 10.598):
+        for b in (10.6, 10.9, 11.2):
+            assert _slow_contact_run(mode, [a, b, t_end]) == one, (a, b)

@@ -981,6 +981,8 @@ struct pfvi_state {
     int output_cut;                // set by the glue: hooks need REBOUND's own outputs, so sim.dt caps
                                    // every step (none may pass a time REBOUND asks to finish on)
     int output_taken_up;           // set by the glue: the step starts from the run's state, its force kept
+    int output_contact_pending;    // the run's state kept ends a step retaken at a contact that an output
+                                   // was shown before: REBOUND has not seen it yet (saved)
     double output_failed_t;        // an output step from the state at this t did not converge
     // MEGNO's stage velocities: w_k = w_0 + h sum_j collocation[k][j] a_j,
     // collocation[k][j] the integral of l_j from 0 to c^k (Lobatto IIIA), for s = collocation_s.

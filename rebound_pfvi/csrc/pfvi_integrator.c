@@ -321,6 +321,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "predictor_h", offsetof(struct pfvi_state, predictor_h), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_t", offsetof(struct pfvi_state, predictor_t), 0, 0, 0 },
     { "", REB_INT, "contact_chain", offsetof(struct pfvi_state, contact_chain), 0, 0, 0 },
+    { "", REB_INT, "output_contact_pending", offsetof(struct pfvi_state, output_contact_pending), 0, 0, 0 },
     PFVI_STATISTIC("steps taken by this integrator.", REB_UINT64, n_steps),
     PFVI_STATISTIC("particle-steps in which u = omega*dt exceeded u_max and was limited, "
         "or omega exceeded " PFVI_STR(PFVI_OMEGA_MAX) " (omega^2 beyond the doubles) and the particle "
@@ -896,13 +897,18 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
     if (shown){
         pfvi_output_take_up(r, st);
         r->dt = finishing ? t_target - r->t : dt_entry;
-        if (!finishing && (r->t - t_entry)*dt_entry >= 0.){
+        const int contact_first = st->output_contact_pending && (t_target - r->t)*dt_entry > 0.;
+        if ((!finishing && (r->t - t_entry)*dt_entry >= 0.) || contact_first){
             // A step on from the output: the run's state lies that way, and
             // going there is the step (REBOUND does not know where the next
-            // output is: a time it passed is shown from there).
+            // output is: a time it passed is shown from there). A contact
+            // the run's step ended at before the requested time is shown
+            // first, so that REBOUND's collision search and Encounter see it
+            // (REBOUND then asks again for the time).
             r->dt = proposed;
             r->dt_last_done = pfvi_shown_dt_done(r, proposed);
             st->output_N = 0;
+            st->output_contact_pending = 0;
             return;
         }
     }else{
@@ -970,6 +976,7 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
     // first contact its path shows (pfvi_contact.c).
     st->output_uncapped = dense;
     st->output_cut = r->exact_finish_time == 1 && !pfvi_output_hooks_kept(r);
+    const uint64_t contact_steps = st->statistics.n_contact_steps;
     const double h = contact ? pfvi_contact_step(r, st, N, t0, pfvi_take) : pfvi_take(r, st, N, t0);
     st->output_uncapped = 0;
     st->output_cut = 0;
@@ -1009,6 +1016,7 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
     st->output_last_t0 = t0;
     st->output_last_t1 = r->t;
     st->output_N = 0;  // the simulation holds the run's state
+    st->output_contact_pending = 0;
     if (dense && finishing && (r->t - t_target)*h > 0.){
         // The step passed the requested time: show the state there.
         const double t_end = r->t;
@@ -1021,6 +1029,7 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
             st->output_N = 0;  // the run's state, at the step's end, is the simulation's
         }else{
             r->dt_last_done = pfvi_shown_dt_done(r, h);
+            st->output_contact_pending = (st->statistics.n_contact_steps != contact_steps);
         }
         if (trial == PFVI_TRIAL_ERROR){
             pfvi_report(r, st);
