@@ -1009,6 +1009,8 @@ enum { PFVI_STEP_IDLE = 0, PFVI_STEP_RUNNING = 1, PFVI_STEP_TRACKING = 2, PFVI_S
 PFVI_INTERNAL void pfvi_state_free(struct pfvi_state* st);
 // Scratch for N particles (grows only when N does); 0 (fault recorded) if memory ran out.
 PFVI_INTERNAL int pfvi_scratch(struct pfvi_state* st, size_t N);
+// The contact search's scratch (pfvi_contact.c's boxes, order and compensation), grown with N.
+PFVI_INTERNAL int pfvi_contact_scratch(struct pfvi_state* st, size_t N);
 PFVI_INTERNAL int pfvi_particle_finite(const struct reb_particle* p);
 // The first particle with a non-finite position, velocity or mass; SIZE_MAX if none.
 PFVI_INTERNAL size_t pfvi_first_not_finite(const struct reb_particle* ps, size_t N);
@@ -1256,7 +1258,6 @@ struct pfvi_contact_body {
 };
 PFVI_INTERNAL double pfvi_contact_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
         double (*take)(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0));
-PFVI_INTERNAL void pfvi_contact_free(struct pfvi_state* st);
 
 /* ------------------------------------------------------------------ glue */
 

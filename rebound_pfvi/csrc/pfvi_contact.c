@@ -41,39 +41,6 @@ int pfvi_contact_enabled(const struct reb_simulation* r){
     return 0;
 }
 
-void pfvi_contact_free(struct pfvi_state* st){
-    free(st->contact_bodies);
-    free(st->contact_order);
-    free(st->contact_compensation);
-    st->contact_bodies = NULL;
-    st->contact_order = NULL;
-    st->contact_compensation = NULL;
-    st->contact_allocated = 0;
-}
-
-static int contact_scratch(struct pfvi_state* st, size_t N){
-    if (N <= st->contact_allocated){
-        return 1;
-    }
-    struct pfvi_contact_body* b = realloc(st->contact_bodies, N*sizeof(*b));
-    if (b){
-        st->contact_bodies = b;
-    }
-    size_t* o = realloc(st->contact_order, N*sizeof(*o));
-    if (o){
-        st->contact_order = o;
-    }
-    struct pfvi_compensation* c = realloc(st->contact_compensation, N*sizeof(*c));
-    if (c){
-        st->contact_compensation = c;
-    }
-    if (!b || !o || !c){
-        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_MEMORY, .n = N};
-        return 0;
-    }
-    st->contact_allocated = N;
-    return 1;
-}
 
 // Chebyshev T_n(z), T_n'(z), T_n''(z) for n < m.
 static void chebyshev(double z, int m, double* T, double* dT, double* d2T){
@@ -595,7 +562,7 @@ static double contact_step_once(struct reb_simulation* r, struct pfvi_state* st,
 
 double pfvi_contact_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
         double (*take)(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0)){
-    if (!contact_scratch(st, N)){
+    if (!pfvi_contact_scratch(st, N)){
         return 0.;
     }
     const struct contact_snapshot before = snapshot_of(r, st);
