@@ -22,6 +22,7 @@ import rebound_pfvi  # noqa: F401  (registers "pfvi"; makes rx.add_operator plac
 
 T_END = 500.0
 TAU = -1e3  # the migration and mass-loss e-folding times
+TAU_SPIN = 0.1  # tides_spin's time lag
 
 
 def _sun_jupiter(integrator):
@@ -66,7 +67,7 @@ def tides_spin(integrator):
     rx.add_force(force)
     p = sim.particles[1]
     p.params["k2"] = 0.3
-    p.params["tau"] = 0.1
+    p.params["tau"] = TAU_SPIN
     p.params["I"] = 0.25 * p.m * p.r**2
     n = p.n
     p.params["Omega"] = rebound.spherical_to_xyz(magnitude=3.0 * n, theta=0.0, phi=0.0)

@@ -1001,7 +1001,10 @@ static enum pfvi_glue glue_step(struct reb_simulation* r, struct pfvi_state* st,
     // With collisions and radii, or exit_min_distance: retaken to end at the
     // first contact its path shows (pfvi_contact.c).
     st->output_uncapped = c->dense;
-    st->output_cut = r->exact_finish_time == 1 && !pfvi_output_hooks_kept(r);
+    // (sim.dt as the run proposed it is no cut of REBOUND's: capping there
+    // would leave slivers of the track's interval where the force model
+    // changes between steps, as an ODE's state does.)
+    st->output_cut = r->exact_finish_time == 1 && !pfvi_output_hooks_kept(r) && fabs(r->dt) != fabs(st->dt_proposed);
     c->contact_steps = st->statistics.n_contact_steps;
     const double h = c->h = pfvi_contact_enabled(r) ? pfvi_contact_step(r, st, N, t0, pfvi_take)
         : pfvi_take(r, st, N, t0);
