@@ -978,8 +978,8 @@ struct pfvi_state {
     double output_last_t0;         // the last real step went from output_last_t0 to output_last_t1
     double output_last_t1;
     int output_uncapped;           // set by the glue: the symmetric control takes the whole interval
-    int output_cut;                // set by the glue: hooks need REBOUND's own outputs, so sim.dt caps
-                                   // every step (none may pass a time REBOUND asks to finish on)
+    int output_cut;                // set by the glue: hooks need REBOUND's own outputs and sim.dt is not
+                                   // the run's proposal (REBOUND's cut, default or restored value): it caps
     int output_taken_up;           // set by the glue: the step starts from the run's state, its force kept
     int output_contact_pending;    // the run's state kept ends a step retaken at a contact that an output
                                    // was shown before: REBOUND has not seen it yet (saved)
