@@ -20,18 +20,20 @@ imports it (``reboundx.extras``). From C, call
 import importlib.abc
 import importlib.machinery
 import sys
+from types import ModuleType
+from typing import Any, Optional
 
 _MODULE = "reboundx.extras"
 
 
-def _patch(extras) -> None:
+def _patch(extras: ModuleType) -> None:
     cls = extras.Extras
     if getattr(cls.add_operator, "_pfvi", False):
         return
     original = cls.add_operator
     recorder = extras.REBX_OPERATOR_TYPE["recorder"]
 
-    def add_operator(self, operator, dtfraction=None, timing="post"):
+    def add_operator(self: Any, operator: Any, dtfraction: Optional[float] = None, timing: str = "post") -> Any:
         if (dtfraction is None and isinstance(operator, extras.Operator) and self._sim
                 and self._sim.contents.integrator.name == b"pfvi"
                 and operator._operator_type != recorder):
@@ -40,15 +42,15 @@ def _patch(extras) -> None:
         return original(self, operator, dtfraction, timing)
 
     add_operator.__doc__ = original.__doc__
-    add_operator.__wrapped__ = original
-    add_operator._pfvi = True
+    setattr(add_operator, "__wrapped__", original)
+    setattr(add_operator, "_pfvi", True)
     cls.add_operator = add_operator
 
 
 class _Finder(importlib.abc.MetaPathFinder):
     """Wraps Extras.add_operator once reboundx.extras is executed."""
 
-    def find_spec(self, name, path, target=None):
+    def find_spec(self, name: str, path: Any, target: Any = None) -> Any:
         if name != _MODULE:
             return None
         spec = importlib.machinery.PathFinder.find_spec(name, path, target)
@@ -56,11 +58,11 @@ class _Finder(importlib.abc.MetaPathFinder):
             return spec
         execute = spec.loader.exec_module
 
-        def exec_module(module):
+        def exec_module(module: ModuleType) -> None:
             execute(module)
             _patch(module)
 
-        spec.loader.exec_module = exec_module
+        setattr(spec.loader, "exec_module", exec_module)  # this module's loader only
         return spec
 
 

@@ -201,3 +201,13 @@ def test_reboundx_tides_spin_ode_converges_with_epsilon(outputs):
     reference = spin("bs", 1e-13, 1)
     assert abs(spin("pfvi", 1e-6, outputs) - reference) / reference < 2e-3
     assert abs(spin("pfvi", 1e-11, outputs) - reference) / reference < 2e-5
+
+
+@pytest.mark.parametrize("first", ["rebound_pfvi", "reboundx"])
+def test_add_operator_is_wrapped_whichever_is_imported_first(first):
+    pytest.importorskip("reboundx")
+    second = "reboundx" if first == "rebound_pfvi" else "rebound_pfvi"
+    code = (f"import rebound, {first}, {second}, reboundx; "
+            "print(getattr(reboundx.Extras.add_operator, '_pfvi', False))")
+    out = subprocess.run([sys.executable, "-P", "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "True"
