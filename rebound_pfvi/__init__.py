@@ -25,6 +25,9 @@ import ctypes as _ctypes
 from typing import Any, Dict, Tuple
 
 from ._core import INTEGRATOR_NAME, lib as _lib
+from . import _reboundx
+
+_reboundx.install()  # rx.add_operator(op) places operators for "pfvi" as for IAS15
 
 __version__ = "0.1.0"
 __all__ = ["INTEGRATOR_NAME", "DEFAULTS", "ARCHIVE_FAILURE", "ARCHIVE_RECIPE",

@@ -324,6 +324,11 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // step's error of the limit), the steps are kept as taken until no contact is
 // predicted (n_contact_kept).
 #define PFVI_CONTACT_RETAKES 4
+// sim.collision 'line' and 'linetree': REBOUND searches straight segments
+// drawn back from each step's end over dt_last_done, which pfvi's long curved
+// steps do not follow. A step whose segments meet where its path does not is
+// retaken at half its length, at most this many times, until they agree:
+#define PFVI_CONTACT_LINE_HALVINGS 40
 
 
 /* ---------------------------------------------------- quadrature (lobatto) */
@@ -972,8 +977,8 @@ struct pfvi_state {
     // takes its whole interval instead and the simulation shows the state
     // at the requested time from an output step (a trial from the step's
     // end, never committed). The run's own state is kept here and taken up
-    // again by the next step if nothing was edited. All but output_uncapped
-    // and output_failed_t are saved in archives.
+    // again by the next step if nothing was edited. All but output_uncapped,
+    // output_cut and output_failed_t are saved in archives.
     struct pfvi_output_particle* output_real;   // the run's state at output_t_real
     struct pfvi_output_particle* output_shown;  // what the simulation was given at output_t
     size_t output_N;               // >0: an output is shown (the number of particles)
@@ -988,7 +993,11 @@ struct pfvi_state {
     double output_last_t0;         // the last real step went from output_last_t0 to output_last_t1
     double output_last_t1;
     int output_uncapped;           // set by the glue: the symmetric control takes the whole interval
+    int output_cut;                // set by the glue: hooks need REBOUND's own outputs and sim.dt is not
+                                   // the run's proposal (REBOUND's cut, default or restored value): it caps
     int output_taken_up;           // set by the glue: the step starts from the run's state, its force kept
+    int output_contact_pending;    // the run's state kept ends a step retaken at a contact that an output
+                                   // was shown before: REBOUND has not seen it yet (saved)
     double output_failed_t;        // an output step from the state at this t did not converge
     // MEGNO's stage velocities: w_k = w_0 + h sum_j collocation[k][j] a_j,
     // collocation[k][j] the integral of l_j from 0 to c^k (Lobatto IIIA), for s = collocation_s.
@@ -1015,6 +1024,8 @@ enum { PFVI_STEP_IDLE = 0, PFVI_STEP_RUNNING = 1, PFVI_STEP_TRACKING = 2, PFVI_S
 PFVI_INTERNAL void pfvi_state_free(struct pfvi_state* st);
 // Scratch for N particles (grows only when N does); 0 (fault recorded) if memory ran out.
 PFVI_INTERNAL int pfvi_scratch(struct pfvi_state* st, size_t N);
+// The contact search's scratch (pfvi_contact.c's boxes, order and compensation), grown with N.
+PFVI_INTERNAL int pfvi_contact_scratch(struct pfvi_state* st, size_t N);
 PFVI_INTERNAL int pfvi_particle_finite(const struct reb_particle* p);
 // The first particle with a non-finite position, velocity or mass; SIZE_MAX if none.
 PFVI_INTERNAL size_t pfvi_first_not_finite(const struct reb_particle* ps, size_t N);
@@ -1219,8 +1230,12 @@ PFVI_INTERNAL int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_st
 /* ---------------------------------------------------------------- outputs */
 
 // pfvi_output.c: outputs that leave the run's steps as they are.
+// Whether no hook is set that an output step cannot keep consistent (ODEs,
+// pre- or post-timestep modifications).
+PFVI_INTERNAL int pfvi_output_hooks_kept(const struct reb_simulation* r);
 // Whether this step may take its whole interval and show an output instead
-// of a step cut short (symmetric control, epsilon > 0, fitting 'none').
+// of a step cut short (symmetric control, epsilon > 0, fitting 'none', the
+// hooks kept).
 PFVI_INTERNAL int pfvi_output_eligible(const struct reb_simulation* r, const struct pfvi_state* st);
 // Whether the simulation still shows the kept output, unedited: N, N_var, t,
 // every position, velocity and mass (variational ones too), stages, epsilon
@@ -1252,6 +1267,8 @@ PFVI_INTERNAL double pfvi_controlled_step(struct reb_simulation* r, struct pfvi_
 // pfvi_contact.c: whether a step must be searched for contacts (collisions
 // on with a radius set, or exit_min_distance set; O(N) only with collisions on).
 PFVI_INTERNAL int pfvi_contact_enabled(const struct reb_simulation* r);
+// Whether REBOUND's collision search draws straight segments over the step ('line', 'linetree').
+PFVI_INTERNAL int pfvi_contact_line(const struct reb_simulation* r);
 // Takes one step with `take` (the fixed or controlled step) and, if the
 // step's path shows a contact before its end, retakes it to end there
 // (rolled back, the controller as before the step, the step capped by
@@ -1263,7 +1280,6 @@ struct pfvi_contact_body {
 };
 PFVI_INTERNAL double pfvi_contact_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
         double (*take)(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0));
-PFVI_INTERNAL void pfvi_contact_free(struct pfvi_state* st);
 
 /* ------------------------------------------------------------------ glue */
 

@@ -23,6 +23,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "pfvi.h"
+#include "boundary.h"
 
 int pfvi_contact_enabled(const struct reb_simulation* r){
     if (r->exit_min_distance > 0.){
@@ -40,39 +41,6 @@ int pfvi_contact_enabled(const struct reb_simulation* r){
     return 0;
 }
 
-void pfvi_contact_free(struct pfvi_state* st){
-    free(st->contact_bodies);
-    free(st->contact_order);
-    free(st->contact_compensation);
-    st->contact_bodies = NULL;
-    st->contact_order = NULL;
-    st->contact_compensation = NULL;
-    st->contact_allocated = 0;
-}
-
-static int contact_scratch(struct pfvi_state* st, size_t N){
-    if (N <= st->contact_allocated){
-        return 1;
-    }
-    struct pfvi_contact_body* b = realloc(st->contact_bodies, N*sizeof(*b));
-    if (b){
-        st->contact_bodies = b;
-    }
-    size_t* o = realloc(st->contact_order, N*sizeof(*o));
-    if (o){
-        st->contact_order = o;
-    }
-    struct pfvi_compensation* c = realloc(st->contact_compensation, N*sizeof(*c));
-    if (c){
-        st->contact_compensation = c;
-    }
-    if (!b || !o || !c){
-        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_MEMORY, .n = N};
-        return 0;
-    }
-    st->contact_allocated = N;
-    return 1;
-}
 
 // Chebyshev T_n(z), T_n'(z), T_n''(z) for n < m.
 static void chebyshev(double z, int m, double* T, double* dT, double* d2T){
@@ -536,13 +504,110 @@ static void snapshot_restore(struct reb_simulation* r, struct pfvi_state* st, co
     st->var_retry_valid = 0;
 }
 
+int pfvi_contact_line(const struct reb_simulation* r){
+    return r->collision == REB_COLLISION_LINE || r->collision == REB_COLLISION_LINETREE;
+}
+
+// Whether REBOUND's 'line'/'linetree' search at this step's end, over dt_last_done = dt,
+// would find a pair that does not overlap at the end: its straight segments
+// (each pair's end separation drawn back along its end relative velocity, as
+// REBOUND's collision.c draws them, the inner ring of ghost boxes included)
+// come within the sum of the radii where the step's path, searched by
+// contact_search, does not.
+static int contact_line_only(struct reb_simulation* r, size_t N, double dt){
+    const struct reb_particle* const ps = r->particles;
+    const int gx = r->N_ghost_x > 1 ? 1 : r->N_ghost_x;
+    const int gy = r->N_ghost_y > 1 ? 1 : r->N_ghost_y;
+    const int gz = r->N_ghost_z > 1 ? 1 : r->N_ghost_z;
+    for (int bx=-gx; bx<=gx; bx++){
+        for (int by=-gy; by<=gy; by++){
+            for (int bz=-gz; bz<=gz; bz++){
+                const struct reb_vec6d g = (bx || by || bz) ? reb_boundary_get_ghostbox(r, bx, by, bz)
+                    : (struct reb_vec6d){0., 0., 0., 0., 0., 0.};
+                for (size_t i=0; i<N; i++){
+                    for (size_t j=0; j<N; j++){
+                        const double rsum = ps[i].r + ps[j].r;
+                        if (i == j || !(rsum > 0.)){
+                            continue;
+                        }
+                        const double dx1 = ps[i].x + g.x - ps[j].x, dy1 = ps[i].y + g.y - ps[j].y,
+                            dz1 = ps[i].z + g.z - ps[j].z;
+                        const double r1 = dx1*dx1 + dy1*dy1 + dz1*dz1;
+                        if (r1 <= rsum*rsum){
+                            continue;  // a contact at the end: the path's own
+                        }
+                        const double dvx = ps[i].vx + g.vx - ps[j].vx, dvy = ps[i].vy + g.vy - ps[j].vy,
+                            dvz = ps[i].vz + g.vz - ps[j].vz;
+                        const double dx2 = dx1 - dt*dvx, dy2 = dy1 - dt*dvy, dz2 = dz1 - dt*dvz;
+                        double rmin2 = fmin(r1, dx2*dx2 + dy2*dy2 + dz2*dz2);
+                        const double tc = (dx1*dvx + dy1*dvy + dz1*dvz)/(dvx*dvx + dvy*dvy + dvz*dvz);
+                        if (tc/dt >= 0. && tc/dt <= 1.){
+                            const double dx3 = dx1 - tc*dvx, dy3 = dy1 - tc*dvy, dz3 = dz1 - tc*dvz;
+                            rmin2 = fmin(rmin2, dx3*dx3 + dy3*dy3 + dz3*dz3);
+                        }
+                        if (rmin2 <= rsum*rsum){
+                            return 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    return 0;
+}
+
+static double contact_step_once(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
+        double (*take)(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0),
+        const struct contact_snapshot* before_p);
+
 double pfvi_contact_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
         double (*take)(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0)){
-    if (!contact_scratch(st, N)){
+    if (!pfvi_contact_scratch(st, N)){
         return 0.;
     }
     const struct contact_snapshot before = snapshot_of(r, st);
     memcpy(st->contact_compensation, st->compensation, N*sizeof(*st->compensation));
+    double h = contact_step_once(r, st, N, t0, take, &before);
+    if (h == 0. || r->t == t0 || !pfvi_contact_line(r) || r->collision == REB_COLLISION_NONE){
+        return h;
+    }
+    // 'line'/'linetree': the segments REBOUND draws back over this step must
+    // meet only where its path does (dt_last_done is h after a step; the glue
+    // reports 0 where it shows an output, so REBOUND looks at that state only).
+    for (int k=0; contact_line_only(r, N, h); k++){
+        if (k == PFVI_CONTACT_LINE_HALVINGS || t0 + 0.5*h == t0){
+            st->statistics.n_contact_kept++;
+            return h;
+        }
+        const double proposed = r->dt;
+        pfvi_roll_back(r, st, N, t0);
+        snapshot_restore(r, st, &before);
+        memcpy(st->compensation, st->contact_compensation, N*sizeof(*st->compensation));
+        r->dt = 0.5*h;
+        const int uncapped = st->output_uncapped;
+        st->output_uncapped = 0;
+        const double h_half = take(r, st, N, t0);
+        st->output_uncapped = uncapped;
+        if (h_half == 0.){
+            return 0.;
+        }
+        st->statistics.n_contact_steps++;
+        st->statistics.n_rejected++;
+        st->statistics.n_asymmetric++;
+        if (st->options.epsilon == 0.){
+            r->dt = before.dt;
+        }else if (st->options.step_control != PFVI_STEP_CONTROL_SYMMETRIC){
+            r->dt = proposed;
+        }
+        h = h_half;
+    }
+    return h;
+}
+
+static double contact_step_once(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
+        double (*take)(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0),
+        const struct contact_snapshot* before_p){
+    const struct contact_snapshot before = *before_p;
     const double h = take(r, st, N, t0);
     if (h == 0. || r->t == t0){
         return h;
@@ -568,7 +633,12 @@ double pfvi_contact_step(struct reb_simulation* r, struct pfvi_state* st, size_t
     snapshot_restore(r, st, &before);
     memcpy(st->compensation, st->contact_compensation, N*sizeof(*st->compensation));
     r->dt = cap;
+    // (The retake ends at the contact even where the step would take its
+    // whole interval past an output: the output is shown from its end.)
+    const int uncapped = st->output_uncapped;
+    st->output_uncapped = 0;
     const double h_contact = take(r, st, N, t0);
+    st->output_uncapped = uncapped;
     if (h_contact == 0.){
         return 0.;
     }

@@ -565,8 +565,12 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     // step is the one sim.dt as the last step proposed it would give.
     const int output = st->output_uncapped;
     const double dt = (output && st->dt_proposed != 0.) ? fabs(st->dt_proposed) : fabs(r->dt);
-    const int uncapped = (symmetric_on_track(st, kappa) && (dt == fabs(st->dt_proposed) || dt == fabs(st->dt_last_full)))
-        || (st->dt_proposed == 0. && (dt == PFVI_REBOUND_DT_DEFAULT || output));
+    // (With hooks that need REBOUND's own outputs, output_cut, a sim.dt the
+    // run did not propose caps: REBOUND finishes on a time by checking
+    // t + sim.dt against it.)
+    const int uncapped = !st->output_cut
+        && ((symmetric_on_track(st, kappa) && (dt == fabs(st->dt_proposed) || dt == fabs(st->dt_last_full)))
+            || (st->dt_proposed == 0. && (dt == PFVI_REBOUND_DT_DEFAULT || output)));
     const double cap = uncapped ? INFINITY : dt;
     double h = fmin(t.remaining, cap);
     // The state is at t0 + t_lo: a step capped to reach t0 + sign cap goes

@@ -229,6 +229,12 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "as after any edit. Changes pfvi cannot see (a callback's own variables, REBOUNDx parameters) "
       "made between outputs act from the run's next step, which may start past the output. MEGNO's "
       "Y is the output's; <Y> and the Lyapunov exponent are sampled at the run's steps. "
+      "Hooks an output step cannot keep consistent with the state it shows fall back to steps cut "
+      "at the requested times, as REBOUND's other integrators do: with ODEs (sim.create_ode, "
+      "REBOUNDx's tides_spin among them) or pre- or post-timestep modifications (REBOUNDx operators "
+      "among them) set, the step ends on each requested time, the ODEs are integrated and the "
+      "modifications fired over exactly the time the state shown has lived (dt_last_done), and the "
+      "run's steps depend on the output times. "
       "exact_finish_time = 0, fixed steps (epsilon = 0) and fittings other than 'none' are as "
       "before: sim.dt is the step proposed after each step; a different value (REBOUND finishing on "
       "time where outputs are not shown, the user) caps the step "
@@ -315,6 +321,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "predictor_h", offsetof(struct pfvi_state, predictor_h), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_t", offsetof(struct pfvi_state, predictor_t), 0, 0, 0 },
     { "", REB_INT, "contact_chain", offsetof(struct pfvi_state, contact_chain), 0, 0, 0 },
+    { "", REB_INT, "output_contact_pending", offsetof(struct pfvi_state, output_contact_pending), 0, 0, 0 },
     PFVI_STATISTIC("steps taken by this integrator.", REB_UINT64, n_steps),
     PFVI_STATISTIC("particle-steps in which u = omega*dt exceeded u_max and was limited, "
         "or omega exceeded " PFVI_STR(PFVI_OMEGA_MAX) " (omega^2 beyond the doubles) and the particle "
@@ -371,7 +378,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         REB_UINT64, n_solve_halved),
     PFVI_STATISTIC("output steps: states shown at a time REBOUND asked to finish on (integrate(t) with "
         "exact_finish_time = 1) that the step passed, each a trial step from the step's end back to "
-        "that time, never committed (see step_control). Not counted in n_steps or n_attempts; their "
+        "that time, never committed (see step_control; none while ODEs or pre- or post-timestep "
+        "modifications are set: the step is cut at the time instead). Not counted in n_steps or n_attempts; their "
         "force evaluations are in n_force_evaluations.",
         REB_UINT64, n_outputs),
     PFVI_STATISTIC("steps retaken to end at a contact inside them: with collisions on (sim.collision not "
@@ -380,7 +388,14 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "polynomial through its stages (positions and accelerations at its nodes, velocities at its "
         "ends; candidate pairs by a bound from each body's nodes); the step is retaken to end there, "
         PFVI_STR(PFVI_CONTACT_DEPTH) " of the limit inside it (at most half the dip), so that REBOUND's "
-        "collision search and resolve and its Encounter see the contact at the step's end. Included in "
+        "collision search and resolve and its Encounter see the contact at the step's end. Outputs do "
+        "not cut the searched steps: an output before the contact is shown from the retaken step, and "
+        "REBOUND sees the contact once an output reaches it, as in a single call. With sim.collision "
+        "'line' or 'linetree' (REBOUND's straight segments drawn back from each step's end over "
+        "dt_last_done, which a curved step does not follow) a step whose segments come within the radii "
+        "where its path does not is retaken at half its length until they agree (at most "
+        PFVI_STR(PFVI_CONTACT_LINE_HALVINGS) " times), and a call that shows an output reports "
+        "dt_last_done = 0, so that REBOUND looks at the state shown. Included in "
         "n_rejected and n_asymmetric; the steps are not time-symmetric (rebound_pfvi's docs, collisions).",
         REB_UINT64, n_contact_steps),
     PFVI_STATISTIC("steps kept past a contact their path showed, because " PFVI_STR(PFVI_CONTACT_RETAKES)
@@ -799,6 +814,264 @@ static double pfvi_take(struct reb_simulation* r, struct pfvi_state* st, size_t 
     return (st->options.epsilon == 0.) ? pfvi_fixed_step(r, st, N, t0) : pfvi_controlled_step(r, st, N, t0);
 }
 
+/* ------------------------------------------------------------- the step glue
+ *
+ * One call of pfvi's step is a walk through these states (docs/outputs.md):
+ *
+ *   entry --(an output is shown, unedited)--> TAKE_UP --(the run's state is
+ *     what REBOUND should see next: a step on, or a contact not yet shown)--> done
+ *                                                |
+ *   entry --(otherwise)------------------------> START (the step's start: checks,
+ *     force, density; refused --> done)
+ *       START --(finishing on a time inside the run's last step)--> SHOW_INSIDE
+ *                 (an output step from its end; done, or cut --> STEP)
+ *       START --(otherwise)--> STEP (a step of the run: its whole interval where
+ *                 an output will show the time, cut at sim.dt where REBOUND's own
+ *                 outputs are needed; refused --> done)
+ *       STEP --(finishing, and the step passed the time)--> SHOW_PASSED --> done
+ *
+ * "Finishing" is REBOUND's LAST_STEP (sim.dt cut to reach a requested time);
+ * outputs are shown only where pfvi_output_eligible (the symmetric control,
+ * epsilon > 0, fitting 'none', no hook that needs REBOUND's own outputs).
+ */
+enum pfvi_glue {
+    PFVI_GLUE_TAKE_UP,
+    PFVI_GLUE_START,
+    PFVI_GLUE_SHOW_INSIDE,
+    PFVI_GLUE_STEP,
+    PFVI_GLUE_SHOW_PASSED,
+    PFVI_GLUE_DONE,
+};
+
+// What the call found at its entry, and what its states pass on.
+struct pfvi_call {
+    double t_entry, dt_entry, t_target;
+    double proposed;        // the time REBOUND may see next (the run's proposal)
+    int finishing;          // REBOUND's LAST_STEP: sim.dt cut to reach t_target
+    int eligible;           // outputs may be shown (pfvi_output_eligible)
+    int shown;              // an output is shown, unedited
+    int at_end;             // the simulation is at the run's last step's end
+    int dense;              // this step takes its whole interval; an output shows t_target
+    double t0;              // where the step starts (after a take-up: the run's state)
+    size_t density_N;       // the density the last step found at its end
+    double density_sigma, density_dlog;
+    uint64_t contact_steps; // n_contact_steps before the step
+    double h;               // the step taken
+};
+
+// The dt_last_done a call that shows an output reports: the run's proposal
+// (so that REBOUND, restoring sim.dt after integrate(), restores it), or 0
+// with 'line'/'linetree' collisions and radii, so that REBOUND's search looks
+// at the state shown, not along a segment drawn back from it over a step it
+// did not take (the run's steps are searched along their paths).
+static double pfvi_shown_dt_done(const struct reb_simulation* r, double proposed){
+    return (pfvi_contact_line(r) && pfvi_contact_enabled(r)) ? 0. : proposed;
+}
+
+// A refused call leaves the simulation as it found it: a shown output shown.
+static void glue_show_again(struct reb_simulation* r, struct pfvi_state* st, const struct pfvi_call* c){
+    if (c->shown){
+        pfvi_output_show_again(r, st);
+        r->dt = c->dt_entry;
+    }
+}
+
+static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_call* c){
+    *c = (struct pfvi_call){.t_entry = r->t, .dt_entry = r->dt, .t_target = r->t + r->dt};
+    c->finishing = (st->status_at_start == REB_STATUS_LAST_STEP);
+    c->eligible = pfvi_output_eligible(r, st);
+    c->shown = c->eligible && pfvi_output_is_shown(r, st);
+    // (Compared only where an output may be shown from the last step's end.
+    // A simulation loaded from an archive or copied keeps no end state: it
+    // is at the last step's end if t is where that step ended, as REBOUND
+    // snapshots it between that step and the call that shows the output.)
+    const int loaded_end = c->eligible && c->finishing && st->end_N == 0
+        && st->output_last_t1 != st->output_last_t0 && r->t == st->output_last_t1;
+    c->at_end = c->shown || (c->eligible && c->finishing && (loaded_end || pfvi_state_is_end(r, st)));
+    if (c->eligible && !c->finishing && !c->shown && st->end_N == 0 && st->dt_proposed != 0. && r->dt != 0.
+            && st->output_last_t1 != st->output_last_t0 && r->t == st->output_last_t1
+            && fabs(r->dt) != fabs(st->dt_proposed)){
+        // Such a snapshot holds as sim.dt the cut REBOUND made to finish on
+        // the next output (it writes it after deciding to finish, before the
+        // call that does); the run would have gone on with its proposal.
+        r->dt = copysign(st->dt_proposed, r->dt);
+    }
+    // (A value of REBOUND's own would cap the next step.)
+    c->proposed = (st->dt_proposed != 0.) ? st->dt_proposed : c->dt_entry;
+    if (c->shown){
+        return PFVI_GLUE_TAKE_UP;
+    }
+    st->output_N = 0;  // what the simulation holds is the run's state, or the user's
+    return PFVI_GLUE_START;
+}
+
+static enum pfvi_glue glue_take_up(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_call* c){
+    pfvi_output_take_up(r, st);
+    r->dt = c->finishing ? c->t_target - r->t : c->dt_entry;
+    const int contact_first = st->output_contact_pending && (c->t_target - r->t)*c->dt_entry > 0.;
+    if ((!c->finishing && (r->t - c->t_entry)*c->dt_entry >= 0.) || contact_first){
+        // A step on from the output: the run's state lies that way, and
+        // going there is the step (REBOUND does not know where the next
+        // output is: a time it passed is shown from there). A contact the
+        // run's step ended at before the requested time is shown first, so
+        // that REBOUND's collision search and Encounter see it (REBOUND then
+        // asks again for the time).
+        r->dt = c->proposed;
+        r->dt_last_done = pfvi_shown_dt_done(r, c->proposed);
+        st->output_N = 0;
+        st->output_contact_pending = 0;
+        return PFVI_GLUE_DONE;
+    }
+    return PFVI_GLUE_START;
+}
+
+static enum pfvi_glue glue_start(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_call* c, size_t N){
+    const double t0 = c->t0 = r->t;
+    c->density_N = st->density_N;
+    c->density_sigma = st->density_sigma;
+    c->density_dlog = st->density_dlog;
+    const int started = pfvi_step_start(r, st, N, t0);
+    st->output_taken_up = 0;
+    if (!started){
+        glue_show_again(r, st, c);
+        return PFVI_GLUE_DONE;
+    }
+    // (A contact search (pfvi_contact.c) searches the run's own steps: a
+    // step retaken to end at a contact past the output shows the output from
+    // there, and REBOUND's collision search and Encounter see the contact
+    // when an output reaches it.)
+    c->dense = c->eligible && (c->finishing || c->shown) && st->options.epsilon > 0. && st->density_sigma > 0.;
+    if (!(c->dense && c->finishing)){
+        return PFVI_GLUE_STEP;
+    }
+    // The last step went from output_last_t0 to t0 (its end unedited): a
+    // time inside it is shown from here, with no step of the run.
+    const double d = t0 - st->output_last_t0;
+    const double span = fmax(fmax(fabs(t0), fabs(d)), st->track_seen_hi - st->track_seen_lo);
+    const int near = c->at_end && fabs(c->t_target - t0) <= PFVI_OUTPUT_NEAR*span;
+    const int inside = near || (c->at_end && t0 == st->output_last_t1 && (t0 - c->t_target)*d > 0.
+        && (c->t_target - st->output_last_t0)*d > 0.);
+    if (c->t_target == t0 || (inside && st->output_failed_t != t0)){
+        return PFVI_GLUE_SHOW_INSIDE;
+    }
+    if (inside){
+        c->dense = 0;  // an output step from here did not converge: a step of the run cut short
+    }
+    return PFVI_GLUE_STEP;
+}
+
+static enum pfvi_glue glue_show_inside(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_call* c,
+        size_t N){
+    const double t0 = c->t0;
+    const double d = t0 - st->output_last_t0;
+    const double span = fmax(fmax(fabs(t0), fabs(d)), st->track_seen_hi - st->track_seen_lo);
+    const int near = fabs(c->t_target - t0) <= PFVI_OUTPUT_NEAR*span;
+    const enum pfvi_trial trial = (c->t_target == t0) ? PFVI_TRIAL_OK
+        : pfvi_output_present(r, st, N, c->t_target, near);
+    if (trial == PFVI_TRIAL_OK){
+        // The density found at this state's end still holds for the next step.
+        if (c->density_N == N){
+            st->density_N = c->density_N;
+            st->density_sigma = c->density_sigma;
+            st->density_dlog = c->density_dlog;
+        }
+        r->dt = c->proposed;
+        r->dt_last_done = pfvi_shown_dt_done(r, c->proposed);
+        return PFVI_GLUE_DONE;
+    }
+    if (trial == PFVI_TRIAL_ERROR){
+        // Refused: the simulation as the call found it.
+        if (c->shown){
+            glue_show_again(r, st, c);
+        }else{
+            st->output_N = 0;
+        }
+        pfvi_report(r, st);
+        return PFVI_GLUE_DONE;
+    }
+    // Not converged: the time is reached by a step of the run cut short, as
+    // before outputs were shown (output_failed_t).
+    st->output_failed_t = t0;
+    c->dense = 0;
+    return PFVI_GLUE_STEP;
+}
+
+static enum pfvi_glue glue_step(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_call* c, size_t N){
+    const double t0 = c->t0;
+    // With collisions and radii, or exit_min_distance: retaken to end at the
+    // first contact its path shows (pfvi_contact.c).
+    st->output_uncapped = c->dense;
+    // (sim.dt as the run proposed it is no cut of REBOUND's: capping there
+    // would leave slivers of the track's interval where the force model
+    // changes between steps, as an ODE's state does.)
+    st->output_cut = r->exact_finish_time == 1 && !pfvi_output_hooks_kept(r) && fabs(r->dt) != fabs(st->dt_proposed);
+    c->contact_steps = st->statistics.n_contact_steps;
+    const double h = c->h = pfvi_contact_enabled(r) ? pfvi_contact_step(r, st, N, t0, pfvi_take)
+        : pfvi_take(r, st, N, t0);
+    st->output_uncapped = 0;
+    st->output_cut = 0;
+    if (h == 0.){
+        pfvi_report(r, st);
+        if (r->t == t0){
+            glue_show_again(r, st, c);
+        }
+        return PFVI_GLUE_DONE;
+    }
+    if (r->t == t0){
+        // t + h rounds to t: REBOUND would call this step for ever.
+        pfvi_roll_back(r, st, N, t0);
+        pfvi_error(r, "pfvi: the step dt = %.3g does not change t = %.17g (it is below the rounding of t); "
+                "step not taken, state restored. Use a larger dt, or start t nearer 0.", h, t0);
+        return PFVI_GLUE_DONE;
+    }
+    r->dt_last_done = h;
+    struct pfvi_statistics* const stats = &st->statistics;
+    stats->n_steps++;
+    stats->iterations_mean = (double)stats->n_iterations/(double)stats->n_steps;
+    pfvi_keep_end(r, st, N);  // the end of this step is the start of the next
+    if (st->var_N){
+        pfvi_var_keep_end(r, st);
+        if (r->calculate_megno){
+            // MEGNO's sums through REBOUND's own update, as IAS15 and WHFast do,
+            // with the step's increment of 2 int (t - t_0) delta.delta'/|delta|^2 dt.
+            // REBOUND's <Y> adds Y at the step's end times the step (a
+            // rectangle rule, coarse at pfvi's long steps): the sum is given
+            // the step's quadrature of Y over its stages instead.
+            const double Y_end = (r->megno_Ys + st->trial.megno_dY)/(r->t - r->megno_initial_t);
+            r->megno_Yss += st->trial.megno_Y_integral - Y_end*h;
+            reb_tools_megno_update(r, st->trial.megno_dY, h);
+        }
+    }
+    st->output_last_t0 = t0;
+    st->output_last_t1 = r->t;
+    st->output_N = 0;  // the simulation holds the run's state
+    st->output_contact_pending = 0;
+    return (c->dense && c->finishing && (r->t - c->t_target)*h > 0.) ? PFVI_GLUE_SHOW_PASSED : PFVI_GLUE_DONE;
+}
+
+// The step passed the requested time: show the state there.
+static enum pfvi_glue glue_show_passed(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_call* c,
+        size_t N){
+    const double t_end = r->t, h = c->h;
+    const double proposed = r->dt;
+    const double span = fmax(fmax(fabs(t_end), fabs(h)), st->track_seen_hi - st->track_seen_lo);
+    const enum pfvi_trial trial = pfvi_output_present(r, st, N, c->t_target,
+            fabs(c->t_target - t_end) <= PFVI_OUTPUT_NEAR*span);
+    r->dt = proposed;
+    if (trial == PFVI_TRIAL_OK){
+        r->dt_last_done = pfvi_shown_dt_done(r, h);
+        st->output_contact_pending = (st->statistics.n_contact_steps != c->contact_steps);
+        return PFVI_GLUE_DONE;
+    }
+    st->output_N = 0;  // the run's state, at the step's end, is the simulation's
+    if (trial == PFVI_TRIAL_ERROR){
+        pfvi_report(r, st);
+    }else{
+        st->output_failed_t = t_end;  // REBOUND comes back for the time: a step cut short
+    }
+    return PFVI_GLUE_DONE;
+}
+
 static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
     if (!pfvi_options_valid(r, &st->settings)){
         return;
@@ -843,148 +1116,16 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
         return;
     }
     r->gravity_ignore_terms = REB_GRAVITY_IGNORE_TERMS_NONE;
-    // Outputs (pfvi_output.c): REBOUND finishing on a requested time
-    // (status LAST_STEP, sim.dt cut to reach it) gets the state there from
-    // an output step, and the run's own steps go on unbroken; a shown output
-    // left unedited is taken up again before anything else.
-    const double t_entry = r->t, dt_entry = r->dt;
-    const double t_target = t_entry + dt_entry;
-    const int finishing = (st->status_at_start == REB_STATUS_LAST_STEP);
-    const int eligible = pfvi_output_eligible(r, st);
-    const int shown = eligible && pfvi_output_is_shown(r, st);
-    // (Compared only where an output may be shown from the last step's end.)
-    const int at_end = shown || (eligible && finishing && pfvi_state_is_end(r, st));
-    // The time REBOUND may see next (the proposal, as after a step; a value
-    // of its own would cap the next step).
-    const double proposed = (st->dt_proposed != 0.) ? st->dt_proposed : dt_entry;
-    if (shown){
-        pfvi_output_take_up(r, st);
-        r->dt = finishing ? t_target - r->t : dt_entry;
-        if (!finishing && (r->t - t_entry)*dt_entry >= 0.){
-            // A step on from the output: the run's state lies that way, and
-            // going there is the step (REBOUND does not know where the next
-            // output is: a time it passed is shown from there).
-            r->dt = proposed;
-            r->dt_last_done = proposed;
-            st->output_N = 0;
-            return;
-        }
-    }else{
-        st->output_N = 0;  // what the simulation holds is the run's state, or the user's
-    }
-    const double t0 = r->t;
-    const size_t density_N = st->density_N;
-    const double density_sigma = st->density_sigma, density_dlog = st->density_dlog;
-    const int started = pfvi_step_start(r, st, N, t0);
-    st->output_taken_up = 0;
-    if (!started){
-        if (shown){
-            pfvi_output_show_again(r, st);
-            r->dt = dt_entry;
-        }
-        return;
-    }
-    // (With a contact search (pfvi_contact.c) the steps end where REBOUND
-    // asks, as before outputs were shown: a contact inside a step that passed
-    // the output would otherwise be searched from a state the run never had.)
-    const int contact = pfvi_contact_enabled(r);
-    int dense = eligible && (finishing || shown) && st->options.epsilon > 0. && st->density_sigma > 0. && !contact;
-    if (dense && finishing){
-        // The last step went from output_last_t0 to t0 (its end unedited):
-        // a time inside it is shown from here, with no step of the run.
-        const double d = t0 - st->output_last_t0;
-        const double span = fmax(fmax(fabs(t0), fabs(d)), st->track_seen_hi - st->track_seen_lo);
-        const int near = at_end && fabs(t_target - t0) <= PFVI_OUTPUT_NEAR*span;
-        const int inside = near || (at_end && t0 == st->output_last_t1 && (t0 - t_target)*d > 0.
-            && (t_target - st->output_last_t0)*d > 0.);
-        if (t_target == t0 || (inside && st->output_failed_t != t0)){
-            const enum pfvi_trial trial = (t_target == t0) ? PFVI_TRIAL_OK : pfvi_output_present(r, st, N, t_target, near);
-            if (trial == PFVI_TRIAL_OK){
-                // The density found at this state's end still holds for the next step.
-                if (density_N == N){
-                    st->density_N = density_N;
-                    st->density_sigma = density_sigma;
-                    st->density_dlog = density_dlog;
-                }
-                r->dt = proposed;
-                r->dt_last_done = proposed;
-                return;
-            }
-            if (trial == PFVI_TRIAL_ERROR){
-                // Refused: the simulation as the call found it.
-                if (shown){
-                    pfvi_output_show_again(r, st);
-                    r->dt = dt_entry;
-                }else{
-                    st->output_N = 0;
-                }
-                pfvi_report(r, st);
-                return;
-            }
-            // Not converged: the time is reached by a step of the run cut
-            // short, as before outputs were shown (output_failed_t).
-            st->output_failed_t = t0;
-            dense = 0;
-        }else if (inside){
-            dense = 0;
-        }
-    }
-    // With collisions and radii, or exit_min_distance: retaken to end at the
-    // first contact its path shows (pfvi_contact.c).
-    st->output_uncapped = dense;
-    const double h = contact ? pfvi_contact_step(r, st, N, t0, pfvi_take) : pfvi_take(r, st, N, t0);
-    st->output_uncapped = 0;
-    if (h == 0.){
-        pfvi_report(r, st);
-        if (shown && r->t == t0){
-            pfvi_output_show_again(r, st);
-            r->dt = dt_entry;
-        }
-        return;
-    }
-    if (r->t == t0){
-        // t + h rounds to t: REBOUND would call this step for ever.
-        pfvi_roll_back(r, st, N, t0);
-        pfvi_error(r, "pfvi: the step dt = %.3g does not change t = %.17g (it is below the rounding of t); "
-                "step not taken, state restored. Use a larger dt, or start t nearer 0.", h, t0);
-        return;
-    }
-    r->dt_last_done = h;
-    struct pfvi_statistics* const stats = &st->statistics;
-    stats->n_steps++;
-    stats->iterations_mean = (double)stats->n_iterations/(double)stats->n_steps;
-    pfvi_keep_end(r, st, N);  // the end of this step is the start of the next
-    if (st->var_N){
-        pfvi_var_keep_end(r, st);
-        if (r->calculate_megno){
-            // MEGNO's sums through REBOUND's own update, as IAS15 and WHFast do,
-            // with the step's increment of 2 int (t - t_0) delta.delta'/|delta|^2 dt.
-            // REBOUND's <Y> adds Y at the step's end times the step (a
-            // rectangle rule, coarse at pfvi's long steps): the sum is given
-            // the step's quadrature of Y over its stages instead.
-            const double Y_end = (r->megno_Ys + st->trial.megno_dY)/(r->t - r->megno_initial_t);
-            r->megno_Yss += st->trial.megno_Y_integral - Y_end*h;
-            reb_tools_megno_update(r, st->trial.megno_dY, h);
-        }
-    }
-    st->output_last_t0 = t0;
-    st->output_last_t1 = r->t;
-    st->output_N = 0;  // the simulation holds the run's state
-    if (dense && finishing && (r->t - t_target)*h > 0.){
-        // The step passed the requested time: show the state there.
-        const double t_end = r->t;
-        const double proposed = r->dt;
-        const double span = fmax(fmax(fabs(t_end), fabs(h)), st->track_seen_hi - st->track_seen_lo);
-        const enum pfvi_trial trial = pfvi_output_present(r, st, N, t_target,
-                fabs(t_target - t_end) <= PFVI_OUTPUT_NEAR*span);
-        r->dt = proposed;
-        if (trial != PFVI_TRIAL_OK){
-            st->output_N = 0;  // the run's state, at the step's end, is the simulation's
-        }
-        if (trial == PFVI_TRIAL_ERROR){
-            pfvi_report(r, st);
-        }else if (trial != PFVI_TRIAL_OK){
-            st->output_failed_t = t_end;  // REBOUND comes back for the time: a step cut short
+    struct pfvi_call c;
+    enum pfvi_glue state = glue_entry(r, st, &c);
+    while (state != PFVI_GLUE_DONE){
+        switch (state){
+            case PFVI_GLUE_TAKE_UP:     state = glue_take_up(r, st, &c); break;
+            case PFVI_GLUE_START:       state = glue_start(r, st, &c, N); break;
+            case PFVI_GLUE_SHOW_INSIDE: state = glue_show_inside(r, st, &c, N); break;
+            case PFVI_GLUE_STEP:        state = glue_step(r, st, &c, N); break;
+            case PFVI_GLUE_SHOW_PASSED: state = glue_show_passed(r, st, &c, N); break;
+            default:                    state = PFVI_GLUE_DONE; break;
         }
     }
 }

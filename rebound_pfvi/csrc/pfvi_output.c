@@ -89,10 +89,24 @@ static int output_var_scale(const struct reb_simulation* r, const struct pfvi_st
     return 1;
 }
 
+// Hooks REBOUND runs around each step that an output step cannot keep
+// consistent with the state it shows: the ODEs of sim.create_ode (REBOUND
+// integrates them over [t - dt_last_done, t] after the step, with the
+// particles as the step leaves them; pfvi does not step them, so it cannot
+// give them a state at an output inside its step), and pre- and post-timestep
+// modifications (REBOUNDx operators among them): they act on the state
+// shown, for dt_last_done, and an output step's time is not a time the run
+// lived. With any of them set, outputs are REBOUND's own: the step is cut to
+// end on the requested time, and every hook sees a state the run has, after
+// exactly the time it lived.
+int pfvi_output_hooks_kept(const struct reb_simulation* r){
+    return r->N_odes == 0 && r->pre_timestep_modifications == NULL && r->post_timestep_modifications == NULL;
+}
+
 int pfvi_output_eligible(const struct reb_simulation* r, const struct pfvi_state* st){
     const struct pfvi_options* const o = &st->settings;
     return o->step_control == PFVI_STEP_CONTROL_SYMMETRIC && o->epsilon > 0. && o->fitting == PFVI_FITTING_NONE
-        && r->N > 0;
+        && r->N > 0 && pfvi_output_hooks_kept(r);
 }
 
 int pfvi_output_is_shown(const struct reb_simulation* r, const struct pfvi_state* st){

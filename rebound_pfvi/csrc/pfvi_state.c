@@ -15,7 +15,9 @@
 #include "boundary.h"
 
 void pfvi_state_free(struct pfvi_state* st){
-    pfvi_contact_free(st);
+    free(st->contact_bodies);
+    free(st->contact_order);
+    free(st->contact_compensation);
     free(st->start);
     free(st->end);
     free(st->fit);
@@ -150,6 +152,31 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
         return 0;
     }
     st->N_allocated = N;
+    return 1;
+}
+
+// The contact search's scratch (pfvi_contact.c), grown with N.
+int pfvi_contact_scratch(struct pfvi_state* st, size_t N){
+    if (N <= st->contact_allocated){
+        return 1;
+    }
+    struct pfvi_contact_body* b = realloc(st->contact_bodies, N*sizeof(*b));
+    if (b){
+        st->contact_bodies = b;
+    }
+    size_t* o = realloc(st->contact_order, N*sizeof(*o));
+    if (o){
+        st->contact_order = o;
+    }
+    struct pfvi_compensation* c = realloc(st->contact_compensation, N*sizeof(*c));
+    if (c){
+        st->contact_compensation = c;
+    }
+    if (!b || !o || !c){
+        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_MEMORY, .n = N};
+        return 0;
+    }
+    st->contact_allocated = N;
     return 1;
 }
 

@@ -1,0 +1,156 @@
+"""REBOUND's hooks around a step under outputs (issue 40, item 1): ODEs from
+sim.create_ode and pre- and post-timestep modifications see the state shown
+at every output, after exactly the time it lived (docs/outputs.md).
+
+With such a hook set, pfvi's outputs are REBOUND's own (the step is cut to end
+on the requested time); without one, outputs are shown from the run's steps.
+"""
+import math
+
+import pytest
+import rebound
+
+import rebound_pfvi  # noqa: F401  (registers "pfvi")
+
+MDOT = 1e-6
+
+
+LIVED = []
+
+
+def _mass_loss(simp):
+    """REBOUND's test_post_timestep_modifications: a mass that falls at MDOT."""
+    sim = simp.contents
+    LIVED.append(sim.dt_last_done)
+    sim.particles[2].m -= sim.dt_last_done * MDOT
+
+
+def _three_bodies():
+    sim = rebound.Simulation()
+    sim.integrator = "pfvi"
+    sim.add(m=1)
+    sim.add(m=1e-3, a=1)
+    sim.add(m=1e-3, a=5)
+    sim.move_to_com()
+    return sim
+
+
+def _harmonic(ode, y_dot, y, t):
+    y_dot[0] = y[1]
+    y_dot[1] = -100.0 * y[0]
+
+
+def _clock(ode, y_dot, y, t):
+    y_dot[0] = 1.0
+
+
+def _times(t_end, n):
+    return [t_end * (k + 1) / n for k in range(n)]
+
+
+@pytest.mark.parametrize("outputs", [1, 10, 1000])
+def test_post_timestep_mass_loss_at_outputs(outputs):
+    # Each hook call removes MDOT times the time the shown state lived: the
+    # mass at every output is 1e-3 - MDOT t. Before the rule, an output call
+    # reported the run's proposed step as dt_last_done (1 output: 8.2e-8 off,
+    # 1000: 9.1e-4 off).
+    sim = _three_bodies()
+    sim.post_timestep_modifications = _mass_loss
+    LIVED.clear()
+    worst = 0.0
+    for t in _times(10.0, outputs):
+        sim.integrate(t)
+        assert sim.t == pytest.approx(t, rel=1e-12, abs=0)  # REBOUND's finish (t + (t_out - t) rounds)
+        worst = max(worst, abs(sim.particles[2].m - (1e-3 - MDOT * sim.t)))
+    assert worst < 1e-15  # measured <= 6e-17 (IAS15: 2e-19 at one output)
+    # No step passed an output to be brought back by a backward one (the
+    # first step of a new simulation did, 0.92 forward then 0.91 back).
+    assert min(LIVED) > 0.0
+    assert sim.integrator.n_outputs == 0  # cut steps, as the hook needs
+
+
+@pytest.mark.parametrize("outputs", [1, 10, 1000])
+def test_ode_beside_nbody_at_outputs(outputs):
+    # REBOUND's test_bs harmonic oscillator beside three bodies: y = cos(10 t)
+    # ends at -1 at t = 20.5 pi. REBOUND's bounds at one output: 1.5e-9 and
+    # 5e-9. Over 1000 outputs the ODE solver's own restarts cost more: IAS15
+    # measured 1.2e-8 in y', pfvi 1.1e-8.
+    sim = rebound.Simulation()
+    sim.add(m=1)
+    sim.add(m=1e-3, a=1, e=0.123)
+    sim.add(m=1e-3, a=2.6, e=0.123)
+    sim.dt = 0.1
+    sim.integrator = "pfvi"
+    ode = sim.create_ode(length=2, needs_nbody=False)
+    ode.derivatives = _harmonic
+    ode.y[0], ode.y[1] = 1.0, 0.0
+    clock = sim.create_ode(length=1, needs_nbody=False)
+    clock.derivatives = _clock
+    clock.y[0] = 0.0
+    for t in _times(20.5 * math.pi, outputs):
+        sim.integrate(t)
+        # The ODE's state belongs to the time shown (before the rule it was
+        # at the run's step end: 0.53 off in y at one output).
+        assert clock.y[0] == pytest.approx(sim.t, rel=1e-12, abs=1e-13)  # measured 1.6e-13 (its solver)
+    assert abs(ode.y[0] + 1.0) < 1.5e-9
+    assert abs(ode.y[1]) < (5e-9 if outputs < 1000 else 2e-8)
+    assert sim.integrator.n_outputs == 0
+
+
+def test_pre_timestep_hook_sees_every_output_time():
+    # A pre-timestep hook runs before each step from the state shown: with it
+    # set the steps end on the outputs, so the times it sees are the run's.
+    seen = []
+
+    def pre(simp):
+        seen.append(simp.contents.t)
+
+    sim = _three_bodies()
+    sim.pre_timestep_modifications = pre
+    times = _times(10.0, 10)
+    for t in times:
+        sim.integrate(t)
+    assert sim.integrator.n_outputs == 0
+    for t in times[:-1]:
+        assert t in seen  # each output is a step's start, not a time shown between steps
+
+
+def test_without_hooks_outputs_are_still_shown_from_the_run():
+    # The fallback is only for the hooks: a plain run keeps its own steps.
+    sim = _three_bodies()
+    for t in _times(10.0, 10):
+        sim.integrate(t)
+    assert sim.integrator.n_outputs == 10
+
+
+def test_help_says_which_hooks_cut_the_steps():
+    doc = rebound.Simulation()
+    doc.integrator = "pfvi"
+    import pydoc
+    text = pydoc.render_doc(doc.integrator, renderer=pydoc.plaintext)
+    assert "create_ode" in text and "post-timestep modifications" in text
+
+
+@pytest.mark.parametrize("outputs", [1, 10, 100])
+def test_hooks_over_a_round_trip_with_a_comet(outputs):
+    # Beyond the designed case: two planets and an e = 0.7 test particle,
+    # 20 time units out and back with outputs both ways. The mass lost out
+    # is regained back (dt_last_done is negative backward) and the clock ODE
+    # reads t at every output. Measured: mass within 1.1e-18, clock 3.9e-14.
+    sim = rebound.Simulation()
+    sim.integrator = "pfvi"
+    sim.add(m=1)
+    sim.add(m=1e-3, a=1, e=0.3)
+    sim.add(m=1e-3, a=5, e=0.2)
+    sim.add(m=0, a=2.5, e=0.7)
+    sim.move_to_com()
+    sim.post_timestep_modifications = _mass_loss
+    clock = sim.create_ode(length=1, needs_nbody=False)
+    clock.derivatives = _clock
+    clock.y[0] = 0.0
+    out = _times(20.0, outputs)
+    for t in out + [20.0 - t for t in out]:
+        sim.integrate(t)
+        assert abs(sim.particles[2].m - (1e-3 - MDOT * sim.t)) < 1e-16
+        assert abs(clock.y[0] - sim.t) < 1e-12
+    assert sim.t == 0.0
