@@ -173,6 +173,14 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // corrections (asymmetric steps) over 1e4 Jupiter orbits of the outer solar
 // system and the energy error grew 12-fold (docs/roundoff.md). 0: unweighted.
 #define PFVI_ENCOUNTER_WEIGHTED 1
+// The weight's crossing term X^p (pfvi_timescales.c, encounter_weight): a
+// pair crossing faster than its bodies orbit (X = nu_cr^2/(G (S_i + S_j)) > 1)
+// is weighted towards 1. Weighted by its pull alone, a retrograde body inside
+// Jupiter's orbit (R ~ 1e-3, X ~ 2 at conjunction) was given steps longer than
+// the passage and ended up to 1e4 epsilon a n off at s = 8 (issue 40); p = 2:
+// at most 83 over benchmarks/retrograde_sweep.py's grid (p = 4: 45 on more
+// runs), the compact five-planet system 2 asymmetric steps over 1e4 orbits.
+#define PFVI_ENCOUNTER_FAST_POWER 2
 // The a posteriori check of a symmetric step: its stages resolve each
 // particle's acceleration to u = ((s - 1)! |D|/A)^(1/(s - 1)) (D the leading
 // coefficient of their polynomial, A the largest |a|), about h times the
