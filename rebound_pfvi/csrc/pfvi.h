@@ -177,10 +177,11 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // pair crossing faster than its bodies orbit (X = nu_cr^2/(G (S_i + S_j)) > 1)
 // is weighted towards 1. Weighted by its pull alone, a retrograde body inside
 // Jupiter's orbit (R ~ 1e-3, X ~ 2 at conjunction) was given steps longer than
-// the passage and ended up to 1e4 epsilon a n off at s = 8 (issue 40); p = 2:
-// at most 83 over benchmarks/retrograde_sweep.py's grid (p = 4: 45 on more
-// runs), the compact five-planet system 2 asymmetric steps over 1e4 orbits.
-#define PFVI_ENCOUNTER_FAST_POWER 2
+// the passage and ended up to 1e4 epsilon a n off at s = 8 (issue 40). p = 4
+// keeps planetary pairs' weights (X ~ 0.1: the compact five-planet system
+// takes no asymmetric step over 1e4 orbits, 2.5% more steps); p = 2 broke
+// that (2 asymmetric steps in its first 500).
+#define PFVI_ENCOUNTER_FAST_POWER 4
 // The a posteriori check of a symmetric step: its stages resolve each
 // particle's acceleration to u = ((s - 1)! |D|/A)^(1/(s - 1)) (D the leading
 // coefficient of their polynomial, A the largest |a|), about h times the

@@ -253,7 +253,7 @@ struct density_sum {
 };
 
 typedef char pfvi_density_norm_is_8[(PFVI_DENSITY_NORM == 8) ? 1 : -1];
-typedef char pfvi_encounter_fast_power_is_2[(PFVI_ENCOUNTER_FAST_POWER == 2) ? 1 : -1];
+typedef char pfvi_encounter_fast_power_is_4[(PFVI_ENCOUNTER_FAST_POWER == 4) ? 1 : -1];
 
 // x^K by squaring.
 static inline double power_K(double x){
@@ -373,7 +373,7 @@ static int encounter_weight(const struct encounter_pair* q, const double d[3], c
         const double dlog_X = 2.*(w[0]*b[0] + w[1]*b[1] + w[2]*b[2])/v2 - 2.*(d[0]*w[0] + d[1]*w[1] + d[2]*w[2])/rs2
             - 1.5*(S_i*pi->dlog_pull + S_j*pj->dlog_pull)/S;
         const double X2 = X*X;
-        Q = X2;
+        Q = X2*X2;
         dQ = PFVI_ENCOUNTER_FAST_POWER*dlog_X*Q;
         if (!isfinite(Q) || !isfinite(dQ)){
             return 1;
