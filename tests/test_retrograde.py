@@ -37,8 +37,9 @@ def _goal(system, s, eps):
     return error / (sim.integrator.epsilon_effective * a * T / math.sqrt(a**3))
 
 
-# (system (inclination, mass, a, e, f), s, epsilon): the build before the fix (547cb7b)
-# ended 2.3e4, 617, 31 and 0.005 epsilon a n off; prograde and s = 4 stay far within.
+# (system (inclination, mass, a, e, f), s, epsilon). The build before the fix
+# (547cb7b) failed five of them: 2.3e4, 617, 31, 1.1e4 and 4.5e3 epsilon a n;
+# the prograde body and s = 4 are controls.
 @pytest.mark.parametrize("system, s, eps", [
     ((math.pi, 1e-5, 3.0, 0.3, 2.0), 8, 1e-10),
     ((math.pi, 0.0, 3.0, 0.0, 2.0), 6, 1e-6),
@@ -46,19 +47,9 @@ def _goal(system, s, eps):
     ((math.pi, 1e-5, 2.0, 0.0, 2.0), 8, 1e-9),
     ((0.0, 0.0, 3.0, 0.3, 0.0), 8, 1e-10),
     ((math.pi, 0.0, 3.0, 0.3, 2.0), 4, 1e-6),
+    ((math.pi, 0.0, 3.0, 0.3, 0.0), 8, 1e-6),
+    ((2.5, 0.0, 3.0, 0.0, 0.0), 8, 1e-10),
+    ((math.pi / 2, 1e-5, 3.0, 0.0, 2.0), 8, 1e-6),
 ])
 def test_inclined_and_retrograde_bodies_within_the_goal(system, s, eps):
     assert _goal(system, s, eps) <= 10.0
-
-
-# Known shortfall (docs/step-control.md): still above the goal after the fix
-# (11.7 and 13.4; the build before: 1.1e4 and 4.5e3). strict: a fix shows.
-@pytest.mark.xfail(strict=True, reason="issue 40 item 6: retrograde passages at s = 8 still up to 13x the goal")
-@pytest.mark.parametrize("system, s, eps", [
-    ((math.pi, 0.0, 3.0, 0.3, 0.0), 8, 1e-6),
-    ((2.5, 0.0, 3.0, 0.0, 0.0), 8, 1e-10),
-])
-def test_retrograde_passages_still_beyond_the_goal(system, s, eps):
-    goal = _goal(system, s, eps)
-    assert goal < 100.0   # the fix's reach: far below the 1e3-1e4 before it
-    assert goal <= 10.0

@@ -197,6 +197,18 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // than needed.
 #define PFVI_RESOLUTION_CONSTANTS {0., 0., 1.1, 1.5, 1.95, 2.4, 2.8, 3.2, 3.65}
 #define PFVI_RESOLUTION_MAX 3.
+// The resolution check also measures the pulls on a body beyond its
+// partner's against their own size (pfvi_step.c, issue 40): a weak pull that
+// varies within the step (a retrograde body passing Jupiter at 2 AU, 1e-3 of
+// the Sun's pull) leaves an error proportional to its size, which against the
+// net acceleration read sqrt(F/A) times too fine. That error is a kick at each
+// passage, not the time-symmetric phase error of a Kepler orbit: its energy
+// error shears along the orbit (measured: 374 steps whose local errors summed
+// to 1.25e-6 AU ended 3.7e-4 AU off after 58 orbits). So it is held this many
+// times below the Kepler level (benchmarks/retrograde_sweep.py: 1 left 8 of
+// 240 runs at s = 8 above the goal of 10, 10 none, 100 twice the asymmetric
+// steps for no run over the goal).
+#define PFVI_WEAK_PULL_MARGIN 10.
 #define PFVI_RESOLUTION_RETRIES 5
 #define PFVI_RESOLUTION_SLACK 2.0
 // Fixed steps (epsilon = 0) are checked as the symmetric steps are: the

@@ -121,6 +121,58 @@ void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* st, size_t N,
     stats->omega_max = st->trial.omega_max;
 }
 
+// The resolution of the pulls on particle i beyond its partner's (issue 40):
+// a weak pull that varies within the step (a retrograde body passing
+// Jupiter, 1e-3 of the Sun's pull) leaves an error proportional to its
+// size F times (h/tau)^(2s - 2), while its share of the stages' leading
+// coefficient D_p is F (h/tau)^(s - 1)/(s - 1)!: measured against the net
+// acceleration alone (|D_p|/A) it reads sqrt(F/A) times too fine. Returned
+// as |D_p|/sqrt(A F), the ratio a Kepler pull of the same error shows
+// (A: the largest stage acceleration, or the largest pull if pull2 >= 0),
+// times sqrt(PFVI_WEAK_PULL_MARGIN); 0 without a massive partner. Only for
+// the symmetric control, which refreshed st->partners for this step.
+static double pfvi_weak_pull_resolution(const struct reb_simulation* r, const struct pfvi_state* st, size_t N, size_t i,
+        const struct pfvi_field* field, const double* weights, const double (*a)[3], double pull2){
+    const struct pfvi_partner* const q = &st->partners[i];
+    if (q->j >= N || q->j == i || q->image >= field->n_images || !(r->particles[q->j].m > 0.) || !(field->G > 0.)){
+        return 0.;
+    }
+    const int s = st->options.stages;
+    const struct pfvi_scheme* const scheme = pfvi_scheme_of(st);
+    double xi[PFVI_STAGES_MAX][3], xj[PFVI_STAGES_MAX][3], rest[PFVI_STAGES_MAX][3];
+    scheme->stage_positions(r, st, i, xi);
+    scheme->stage_positions(r, st, q->j, xj);
+    const struct reb_vec6d* const sh = &field->images[q->image];
+    const double shift[3] = {sh->x, sh->y, sh->z};
+    const double Gm = field->G*r->particles[q->j].m;
+    double A2 = 0., F2 = 0.;
+    for (int k=0; k<s; k++){
+        double d[3];
+        for (int c=0; c<3; c++){
+            d[c] = (xj[k][c] + shift[c]) - xi[k][c];
+        }
+        const double r2 = (d[0]*d[0] + d[1]*d[1] + d[2]*d[2]) + field->softening2;
+        const double pull = Gm/(r2*sqrt(r2));
+        for (int c=0; c<3; c++){
+            rest[k][c] = a[k][c] - pull*d[c];
+        }
+        const double a2 = a[k][0]*a[k][0] + a[k][1]*a[k][1] + a[k][2]*a[k][2];
+        const double f2 = rest[k][0]*rest[k][0] + rest[k][1]*rest[k][1] + rest[k][2]*rest[k][2];
+        A2 = fmax(A2, a2);
+        F2 = fmax(F2, f2);
+    }
+    A2 = fmax(A2, pull2);
+    if (!(F2 > 0.) || !(A2 > 0.) || !(F2 < A2)){
+        return 0.;    // no weaker pull: the check against A covers it
+    }
+    // |D_p|/F from the rest's own stage values.
+    const double dp = pfvi_stage_resolution((const double (*)[3])rest, (const double (*)[3])rest, weights, s, 0.);
+    // Held PFVI_WEAK_PULL_MARGIN times below a Kepler orbit's error (the
+    // error goes as the ratio squared).
+    const double ratio = sqrt(PFVI_WEAK_PULL_MARGIN)*dp*sqrt(sqrt(F2/A2));
+    return isfinite(ratio) ? ratio : 0.;
+}
+
 struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, const struct pfvi_state* st, size_t N,
         double h, const struct pfvi_field* field, double pull_above, int residual){
     const struct pfvi_scheme* const scheme = pfvi_scheme_of(st);
@@ -152,12 +204,27 @@ struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, con
         }
         const double (*const values)[3] = (omega != 0.) ? (const double (*)[3])f : (const double (*)[3])a;
         double ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, 0.);
+        double pull2 = -1.;    // the largest pull's square, once measured
         if (field && ratio > pull_above){
             // Unresolved against its net acceleration: measured against the
             // largest pull on it at either end (pfvi_timescales.c).
             const double pull0 = pfvi_largest_pull2(st->start, N, field, i);
             const double pull1 = pfvi_largest_pull2(r->particles, N, field, i);
-            ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, fmax(pull0, pull1));
+            pull2 = fmax(pull0, pull1);
+            ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, pull2);
+        }
+        if (field && !residual && omega == 0. && st->partners){
+            const double weak = pfvi_weak_pull_resolution(r, st, N, i, field, weights, (const double (*)[3])a, pull2);
+            if (weak > ratio && field && weak > pull_above && pull2 < 0.){
+                // Measured against the largest pull too, as above.
+                const double pull0 = pfvi_largest_pull2(st->start, N, field, i);
+                const double pull1 = pfvi_largest_pull2(r->particles, N, field, i);
+                const double again = pfvi_weak_pull_resolution(r, st, N, i, field, weights, (const double (*)[3])a,
+                    fmax(pull0, pull1));
+                ratio = fmax(ratio, again);
+            }else{
+                ratio = fmax(ratio, weak);
+            }
         }
         if (ratio > worst.ratio || (ratio != ratio && worst.ratio == worst.ratio)){
             worst = (struct pfvi_resolution){ratio, i};
