@@ -158,6 +158,17 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // A symmetric step at whose end the density sigma exceeds this many times the
 // one it was sized for (kappa/h) is retried at half the step.
 #define PFVI_DENSITY_JUMP_MAX 3.0
+// Below this total mass a pair's barycentre is formed from mass fractions
+// m_i/M, not m_i x_i/M: the products underflow (issue 40: two masses of
+// 1e-310 at 1e-100 had it at 0 and moved by half their separation in one
+// step). Above it the products are kept, so that every trajectory stays
+// bit-identical.
+#define PFVI_MASS_TINY 1e-150
+// An adaptive step below the rounding of t is blamed on the tightest pair
+// (point masses colliding) when that pair's time scale 1/omega is within
+// 1/this of t's rounding: omega |t| DBL_EPSILON above it (issue 40: two point
+// masses falling together stopped at 0.5 there, and were told to use a larger dt).
+#define PFVI_TIGHT_PAIR_ROUNDING 1e-3
 // Members of the subsystem a body's Kepler term refers to, at most (the
 // partner and what it is bound to more tightly: pfvi_timescales.c).
 #define PFVI_SUBSYSTEM_MAX 8
@@ -947,6 +958,12 @@ struct pfvi_state {
     int reentry_refused;
     int status_at_start;
     double dt_at_start;
+    // The sim.dt REBOUND leaves after an integrate() that ended on an output
+    // (its last full step: the dt_last_done before the finishing step, or
+    // the dt the call started with), so that a sim.dt the user sets after
+    // the output is told from it and honoured (issue 40); 0: not known.
+    double dt_rebound_leaves;
+    int last_finishing;
     size_t step_N;
     // Variational particles (REBOUND's r->particles_var, first and second
     // order): each is stepped by the tangent map of its real particle's
@@ -1203,7 +1220,8 @@ struct pfvi_fixed_check {
     double u;
     double error;
     size_t particle;
-    double kappa;           // |h| sigma, 0 if not computed (PFVI_FIXED_GATE)
+    double kappa;           // |h| sigma, or |h| n at a pericentre inside the step if larger; 0 if not computed (PFVI_FIXED_GATE)
+    size_t pericentre;      // the body whose pericentre gave kappa, SIZE_MAX if none
     int refuse;
 };
 // 0 if the step is refused (rolled back, fault recorded: it is longer than

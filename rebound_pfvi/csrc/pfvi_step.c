@@ -137,6 +137,9 @@ static double pfvi_weak_pull_resolution(const struct reb_simulation* r, const st
     if (q->j >= N || q->j == i || q->image >= field->n_images || !(r->particles[q->j].m > 0.) || !(field->G > 0.)){
         return 0.;
     }
+    if (N < 3 && field->n_images == 1 && !r->additional_forces){
+        return 0.;    // two bodies alone: no pull but the partner's
+    }
     const int s = st->options.stages;
     const struct pfvi_scheme* const scheme = pfvi_scheme_of(st);
     double xi[PFVI_STAGES_MAX][3], xj[PFVI_STAGES_MAX][3], rest[PFVI_STAGES_MAX][3];
@@ -158,8 +161,8 @@ static double pfvi_weak_pull_resolution(const struct reb_simulation* r, const st
         }
         const double a2 = a[k][0]*a[k][0] + a[k][1]*a[k][1] + a[k][2]*a[k][2];
         const double f2 = rest[k][0]*rest[k][0] + rest[k][1]*rest[k][1] + rest[k][2]*rest[k][2];
-        A2 = fmax(A2, a2);
-        F2 = fmax(F2, f2);
+        A2 = (a2 > A2) ? a2 : A2;
+        F2 = (f2 > F2) ? f2 : F2;
     }
     A2 = fmax(A2, pull2);
     if (!(F2 > 0.) || !(A2 > 0.) || !(F2 < A2)){
@@ -254,6 +257,51 @@ static double factorial_of(int n){
     return f;
 }
 
+// The largest angle h n_q (n_q = (mu (1 + e)/q^3)^(1/2), the rate at
+// pericentre q) over the bodies whose bound two-body orbit about their
+// partner (at the step's start p) reaches its pericentre within the step:
+// the densities at a step's ends do not see a pericentre between them (e =
+// 0.9 at 3 steps per orbit: ends 2.6 radians apart, the body ejected).
+static double pericentre_span(const struct reb_particle* p, size_t N, const struct pfvi_field* f,
+        const struct pfvi_partner* partners, double h, size_t* worst){
+    double largest = 0.;
+    for (size_t i=0; i<N; i++){
+        const size_t j = partners[i].j;
+        if (j >= N || partners[i].image >= f->n_images){
+            continue;
+        }
+        const struct reb_vec6d* const sh = &f->images[partners[i].image];
+        const double r[3] = {p[i].x - (p[j].x + sh->x), p[i].y - (p[j].y + sh->y), p[i].z - (p[j].z + sh->z)};
+        const double v[3] = {p[i].vx - (p[j].vx + sh->vx), p[i].vy - (p[j].vy + sh->vy), p[i].vz - (p[j].vz + sh->vz)};
+        const double mu = f->G*(p[i].m + p[j].m);
+        const double rn = sqrt(r[0]*r[0] + r[1]*r[1] + r[2]*r[2]);
+        const double v2 = v[0]*v[0] + v[1]*v[1] + v[2]*v[2];
+        const double rv = r[0]*v[0] + r[1]*v[1] + r[2]*v[2];
+        const double inv_a = 2./rn - v2/mu;
+        if (!(mu > 0.) || !(rn > 0.) || !(inv_a > 0.)){
+            continue;   // unbound or degenerate: no pericentre ahead to time
+        }
+        const double a = 1./inv_a;
+        const double n = sqrt(mu*inv_a*inv_a*inv_a);
+        const double ec = 1. - rn*inv_a, es = rv/sqrt(mu*a);   // e cos E, e sin E
+        const double e = sqrt(ec*ec + es*es);
+        const double M = atan2(es, ec) - es;                    // in (-pi, pi]: 0 at pericentre
+        // Time from the start to the pericentre in the step's direction.
+        const double to_peri = (h > 0.) ? ((M <= 0.) ? -M : 2.*M_PI - M)/n : ((M >= 0.) ? M : 2.*M_PI + M)/n;
+        if (!(to_peri <= fabs(h)) || !(e < 1.)){
+            continue;
+        }
+        const double q = a*(1. - e);
+        const double span = fabs(h)*sqrt(mu*(1. + e)/(q*q*q));
+        // (>=: of a mutual pair, the later body, usually the lighter, is named)
+        if (span >= largest && isfinite(span)){
+            largest = span;
+            *worst = i;
+        }
+    }
+    return largest;
+}
+
 int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
         struct pfvi_fixed_check* out){
     const int s = st->options.stages;
@@ -271,6 +319,7 @@ int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_
     out->error = pfvi_resolution_error(s, out->u);
     out->particle = worst.particle;
     out->kappa = 0.;
+    out->pericentre = SIZE_MAX;
     out->refuse = 0;
     // The largest u any stage values give: |D| <= sum |w_k| A.
     double weights_sum = 2.;
@@ -281,7 +330,10 @@ int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_
         }
     }
     const double u_bound = pow(factorial_of(s - 1)*weights_sum, 1./(s - 1.));
-    if (!(out->u <= PFVI_FIXED_GATE*u_bound)){
+    // (Also at the warning level: the estimate saturates, and a step across
+    // the pericentre of e = 0.9 at 3 steps per orbit read 0.093 per orbit
+    // while it ejected the body: issue 40.)
+    if (!(out->u <= PFVI_FIXED_GATE*u_bound) || out->error > PFVI_FIXED_WARN){
         // The stages' estimate is bounded (|D| <= sum |w_k| A): at s = 8 it
         // stays below 0.01 however long the step, and a step over several
         // orbits can converge to a root that is no motion at all. So a step
@@ -293,7 +345,10 @@ int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_
         pfvi_step_density(st->start, st->end, N, &field, s, st->partners, &sigma0, &g);
         pfvi_step_density(r->particles, NULL, N, &field, s, st->partners, &sigma1, &g);
         const double sigma = fmax(sigma0, sigma1);
-        out->kappa = fabs(h)*sigma;
+        size_t passing = SIZE_MAX;
+        const double peri = pericentre_span(st->start, N, &field, st->partners, h, &passing);
+        out->kappa = fmax(fabs(h)*sigma, peri);
+        out->pericentre = (peri > fabs(h)*sigma) ? passing : SIZE_MAX;
         if (out->kappa > PFVI_FIXED_KAPPA_MAX){
             out->refuse = 1;
         }
@@ -301,7 +356,9 @@ int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_
     st->statistics.error_estimate = out->error;
     if (out->refuse){
         pfvi_roll_back(r, st, N, t0);
-        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_UNRESOLVED_FIXED, .particle = out->particle, .h = h,
+        const int peri = (out->pericentre != SIZE_MAX);
+        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_UNRESOLVED_FIXED,
+            .particle = peri ? out->pericentre : out->particle, .flag = peri, .h = h,
             .t0 = t0, .value = out->error, .bound = out->kappa};
     }
     return !out->refuse;
