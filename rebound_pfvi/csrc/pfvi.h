@@ -801,6 +801,26 @@ struct pfvi_steady {
     double exit_t, exit_sign, exit_held, exit_after;
 };
 
+// A step of the symmetric control that was not time-symmetric (a retake,
+// lambda falling back, the track's drift correction), logged so that a
+// reversal replays it (issue 40, item 7): the step's ends, its direction,
+// and the track as the step found it.
+struct pfvi_replay {
+    double t_start, t_end, sign;
+    double rho, rho_sign, dt_proposed, track_done;
+    int track_at_end;
+    double track_kappa, density_scale, dt_last_full, track_mismatch, track_seen_lo, track_seen_hi;
+    struct pfvi_steady steady;
+    double t_compensation, t_compensated;
+};
+// The last this many are kept (a ring; older ones are not replayed).
+#define PFVI_REPLAY_MAX 256
+// A reversal meets a logged step where its t is within this fraction of the
+// step's length of the step's end: the way back's t drifts from the way
+// out's by the rounding of the intervals (9.4e-10 after 65 yr of a comet's
+// steps of 0.4 yr, measured); the replayed step lands on the logged start.
+#define PFVI_REPLAY_T_SLACK 1e-6
+
 // Integrator state: settings, statistics and the controller's state are
 // REBOUND fields (saved in archives); the scratch grows only with N.
 struct pfvi_state {
@@ -838,6 +858,10 @@ struct pfvi_state {
     // hold began and ended (the direction, 0 for none, and rho on either
     // side), so that a reversal ends or resumes it where the way out did.
     struct pfvi_steady steady;
+    // The asymmetric steps of the way so far, newest last (pfvi_control.c;
+    // not saved in archives: a restarted run does not replay them).
+    struct pfvi_replay replay[PFVI_REPLAY_MAX];
+    size_t replay_first, replay_n;
     // What the symmetric track's time lost to rounding: the state is at
     // r->t + t_compensation (0 if r->t is not t_compensated, the t it was
     // kept for), so that a step capped to finish on time lands there.
