@@ -168,6 +168,17 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // A symmetric step at whose end the density sigma exceeds this many times the
 // one it was sized for (kappa/h) is retried at half the step.
 #define PFVI_DENSITY_JUMP_MAX 3.0
+// Below this total mass a pair's barycentre is formed from mass fractions
+// m_i/M, not m_i x_i/M: the products underflow (issue 40: two masses of
+// 1e-310 at 1e-100 had it at 0 and moved by half their separation in one
+// step). Above it the products are kept, so that every trajectory stays
+// bit-identical.
+#define PFVI_MASS_TINY 1e-150
+// An adaptive step below the rounding of t is blamed on the tightest pair
+// (point masses colliding) when that pair's time scale 1/omega is within
+// 1/this of t's rounding: omega |t| DBL_EPSILON above it (issue 40: two point
+// masses falling together stopped at 0.5 there, and were told to use a larger dt).
+#define PFVI_TIGHT_PAIR_ROUNDING 1e-3
 // Members of the subsystem a body's Kepler term refers to, at most (the
 // partner and what it is bound to more tightly: pfvi_timescales.c).
 #define PFVI_SUBSYSTEM_MAX 8
@@ -183,6 +194,15 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // corrections (asymmetric steps) over 1e4 Jupiter orbits of the outer solar
 // system and the energy error grew 12-fold (docs/roundoff.md). 0: unweighted.
 #define PFVI_ENCOUNTER_WEIGHTED 1
+// The weight's crossing term X^p (pfvi_timescales.c, encounter_weight): a
+// pair crossing faster than its bodies orbit (X = nu_cr^2/(G (S_i + S_j)) > 1)
+// is weighted towards 1. Weighted by its pull alone, a retrograde body inside
+// Jupiter's orbit (R ~ 1e-3, X ~ 2 at conjunction) was given steps longer than
+// the passage and ended up to 1e4 epsilon a n off at s = 8 (issue 40). p = 4
+// keeps planetary pairs' weights (X ~ 0.1: the compact five-planet system
+// takes no asymmetric step over 1e4 orbits, 2.5% more steps); p = 2 broke
+// that (2 asymmetric steps in its first 500).
+#define PFVI_ENCOUNTER_FAST_POWER 4
 // The a posteriori check of a symmetric step: its stages resolve each
 // particle's acceleration to u = ((s - 1)! |D|/A)^(1/(s - 1)) (D the leading
 // coefficient of their polynomial, A the largest |a|), about h times the
@@ -198,6 +218,18 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // than needed.
 #define PFVI_RESOLUTION_CONSTANTS {0., 0., 1.1, 1.5, 1.95, 2.4, 2.8, 3.2, 3.65}
 #define PFVI_RESOLUTION_MAX 3.
+// The resolution check also measures the pulls on a body beyond its
+// partner's against their own size (pfvi_step.c, issue 40): a weak pull that
+// varies within the step (a retrograde body passing Jupiter at 2 AU, 1e-3 of
+// the Sun's pull) leaves an error proportional to its size, which against the
+// net acceleration read sqrt(F/A) times too fine. That error is a kick at each
+// passage, not the time-symmetric phase error of a Kepler orbit: its energy
+// error shears along the orbit (measured: 374 steps whose local errors summed
+// to 1.25e-6 AU ended 3.7e-4 AU off after 58 orbits). So it is held this many
+// times below the Kepler level (benchmarks/retrograde_sweep.py: 1 left 8 of
+// 240 runs at s = 8 above the goal of 10, 10 none, 100 twice the asymmetric
+// steps for no run over the goal).
+#define PFVI_WEAK_PULL_MARGIN 10.
 #define PFVI_RESOLUTION_RETRIES 5
 #define PFVI_RESOLUTION_SLACK 2.0
 // Fixed steps (epsilon = 0) are checked as the symmetric steps are: the
@@ -785,6 +817,26 @@ struct pfvi_steady {
     double exit_t, exit_sign, exit_held, exit_after;
 };
 
+// A step of the symmetric control that was not time-symmetric (a retake,
+// lambda falling back, the track's drift correction), logged so that a
+// reversal replays it (issue 40, item 7): the step's ends, its direction,
+// and the track as the step found it.
+struct pfvi_replay {
+    double t_start, t_end, sign;
+    double rho, rho_sign, dt_proposed, track_done;
+    int track_at_end;
+    double track_kappa, density_scale, dt_last_full, track_mismatch, track_seen_lo, track_seen_hi;
+    struct pfvi_steady steady;
+    double t_compensation, t_compensated;
+};
+// The last this many are kept (a ring; older ones are not replayed).
+#define PFVI_REPLAY_MAX 256
+// A reversal meets a logged step where its t is within this fraction of the
+// step's length of the step's end: the way back's t drifts from the way
+// out's by the rounding of the intervals (9.4e-10 after 65 yr of a comet's
+// steps of 0.4 yr, measured); the replayed step lands on the logged start.
+#define PFVI_REPLAY_T_SLACK 1e-6
+
 // Integrator state: settings, statistics and the controller's state are
 // REBOUND fields (saved in archives); the scratch grows only with N.
 struct pfvi_state {
@@ -822,6 +874,10 @@ struct pfvi_state {
     // hold began and ended (the direction, 0 for none, and rho on either
     // side), so that a reversal ends or resumes it where the way out did.
     struct pfvi_steady steady;
+    // The asymmetric steps of the way so far, newest last (pfvi_control.c;
+    // not saved in archives: a restarted run does not replay them).
+    struct pfvi_replay replay[PFVI_REPLAY_MAX];
+    size_t replay_first, replay_n;
     // What the symmetric track's time lost to rounding: the state is at
     // r->t + t_compensation (0 if r->t is not t_compensated, the t it was
     // kept for), so that a step capped to finish on time lands there.
@@ -946,6 +1002,12 @@ struct pfvi_state {
     int reentry_refused;
     int status_at_start;
     double dt_at_start;
+    // The sim.dt REBOUND leaves after an integrate() that ended on an output
+    // (its last full step: the dt_last_done before the finishing step, or
+    // the dt the call started with), so that a sim.dt the user sets after
+    // the output is told from it and honoured (issue 40); 0: not known.
+    double dt_rebound_leaves;
+    int last_finishing;
     size_t step_N;
     // Variational particles (REBOUND's r->particles_var, first and second
     // order): each is stepped by the tangent map of its real particle's
@@ -1215,7 +1277,8 @@ struct pfvi_fixed_check {
     double u;
     double error;
     size_t particle;
-    double kappa;           // |h| sigma, 0 if not computed (PFVI_FIXED_GATE)
+    double kappa;           // |h| sigma, or |h| n at a pericentre inside the step if larger; 0 if not computed (PFVI_FIXED_GATE)
+    size_t pericentre;      // the body whose pericentre gave kappa, SIZE_MAX if none
     int refuse;
 };
 // 0 if the step is refused (rolled back, fault recorded: it is longer than

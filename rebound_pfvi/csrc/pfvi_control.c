@@ -483,6 +483,56 @@ static int steady_update(struct pfvi_state* st, size_t N, double G, double t, do
     return 0;
 }
 
+// The track as a step finds it, for the replay log (struct pfvi_replay).
+static void replay_keep(const struct pfvi_state* st, struct pfvi_replay* e){
+    e->rho = st->rho; e->rho_sign = st->rho_sign; e->dt_proposed = st->dt_proposed; e->track_done = st->track_done;
+    e->track_at_end = st->track_at_end; e->track_kappa = st->track_kappa; e->density_scale = st->density_scale;
+    e->dt_last_full = st->dt_last_full; e->track_mismatch = st->track_mismatch;
+    e->track_seen_lo = st->track_seen_lo; e->track_seen_hi = st->track_seen_hi; e->steady = st->steady;
+    e->t_compensation = st->t_compensation; e->t_compensated = st->t_compensated;
+}
+
+static void replay_restore(struct pfvi_state* st, const struct pfvi_replay* e){
+    st->rho = e->rho; st->rho_sign = e->rho_sign; st->dt_proposed = e->dt_proposed; st->track_done = e->track_done;
+    st->track_at_end = e->track_at_end; st->track_kappa = e->track_kappa; st->density_scale = e->density_scale;
+    st->dt_last_full = e->dt_last_full; st->track_mismatch = e->track_mismatch;
+    st->track_seen_lo = e->track_seen_lo; st->track_seen_hi = e->track_seen_hi; st->steady = e->steady;
+    st->t_compensation = e->t_compensation; st->t_compensated = e->t_compensated;
+}
+
+static void replay_push(struct pfvi_state* st, const struct pfvi_replay* e){
+    if (st->replay_n == PFVI_REPLAY_MAX){
+        st->replay_first = (st->replay_first + 1) % PFVI_REPLAY_MAX;   // the oldest goes
+        st->replay_n--;
+    }
+    st->replay[(st->replay_first + st->replay_n) % PFVI_REPLAY_MAX] = *e;
+    st->replay_n++;
+}
+
+// The logged step a step from t0 in direction sign retraces: the newest
+// entry taken the other way (entries this direction logged since lie above
+// it), ending (within the track's rounding of t) where this step starts;
+// its index in the ring, or -1.
+static long replay_due(const struct pfvi_state* st, double t0, double sign){
+    for (size_t k=st->replay_n; k-- > 0;){
+        const struct pfvi_replay* const e = &st->replay[(st->replay_first + k) % PFVI_REPLAY_MAX];
+        if (e->sign == sign){
+            continue;
+        }
+        const double length = fabs(e->t_end - e->t_start);
+        return (fabs(t0 - e->t_end) <= PFVI_REPLAY_T_SLACK*length) ? (long)k : -1;
+    }
+    return -1;
+}
+
+// Removes entry k (0: the oldest) from the ring.
+static void replay_remove(struct pfvi_state* st, size_t k){
+    for (size_t m=k; m+1<st->replay_n; m++){
+        st->replay[(st->replay_first + m) % PFVI_REPLAY_MAX] = st->replay[(st->replay_first + m + 1) % PFVI_REPLAY_MAX];
+    }
+    st->replay_n--;
+}
+
 // The symmetric step (Hairer & Soderlind 2005, SIAM J. Sci. Comput. 26,
 // 1838): the grid of the run has intervals h_n = kappa/rho_n+1/2 with
 //     rho_n+1/2 = rho_n-1/2 + kappa G(y_n),   G = d log(sigma)/dt,
@@ -572,6 +622,53 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         && ((symmetric_on_track(st, kappa) && (dt == fabs(st->dt_proposed) || dt == fabs(st->dt_last_full)))
             || (st->dt_proposed == 0. && (dt == PFVI_REBOUND_DT_DEFAULT || output)));
     const double cap = uncapped ? INFINITY : dt;
+    {
+        // A reversal meeting a step the way out took asymmetrically takes it
+        // back as it was and restores the track as that step found it, so
+        // that the way back goes on as a flip there would (issue 40, item 7).
+        const long due = replay_due(st, t0, sign);
+        const struct pfvi_replay entry = (due >= 0) ? st->replay[(st->replay_first + (size_t)due) % PFVI_REPLAY_MAX]
+            : (struct pfvi_replay){0};
+        const struct pfvi_replay* const e = (due >= 0) ? &entry : NULL;
+        // (The track may be off where the way out restarted it: the entry's
+        // own kappa, if it had a track, says it is this run's.)
+        if (e && (e->track_kappa == kappa || !(e->rho > 0.))){
+            struct pfvi_field field_replay;
+            const double back = e->t_start - t0;
+            // Only REBOUND or the user cap it: not pfvi's own proposal.
+            const double replay_cap = (output || (st->dt_proposed != 0. && fabs(r->dt) == fabs(st->dt_proposed)))
+                ? INFINITY : fabs(r->dt);
+            if (fabs(back) <= replay_cap){
+                const enum pfvi_trial trial = pfvi_trial_step(r, st, N, t0, back);
+                if (trial == PFVI_TRIAL_ERROR){
+                    return 0.;
+                }
+                if (trial == PFVI_TRIAL_OK && pfvi_field_of(r, st, &field_replay)){
+                    double sigma1 = 0., g1 = 0.;
+                    pfvi_step_density(r->particles, NULL, N, &field_replay, o->stages, st->partners, &sigma1, &g1);
+                    pfvi_commit_step(r, st, N, back);
+                    r->t = e->t_start;
+                    replay_restore(st, e);
+                    replay_remove(st, (size_t)due);
+                    st->density_sigma = sigma1;
+                    st->density_dlog = g1;
+                    st->density_N = N;
+                    st->density_stages = o->stages;
+                    r->dt = sign*symmetric_position(st, sign, kappa, sigma1, g1).remaining;
+                    st->dt_proposed = r->dt;
+                    return back;
+                }
+                if (trial == PFVI_TRIAL_OK){
+                    pfvi_roll_back(r, st, N, t0);
+                }
+            }
+            st->replay_n = 0;   // not replayed: the log no longer describes the way back
+        }
+    }
+    struct pfvi_replay before;
+    before.t_start = t0;
+    before.sign = sign;
+    replay_keep(st, &before);
     double h = fmin(t.remaining, cap);
     // The state is at t0 + t_lo: a step capped to reach t0 + sign cap goes
     // sign cap - t_lo (t's rounding over the track, kept as x's and v's is).
@@ -717,6 +814,12 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     }
     st->density_scale = lambda;
     st->statistics.n_asymmetric += (uint64_t)asymmetric;
+    if (asymmetric){
+        // (A restart of the track and the steady hold's start or end are
+        // logged too: the replay restores the track as it was before them.)
+        before.t_end = r->t;
+        replay_push(st, &before);
+    }
     // The density at the end is the next step's start density.
     st->density_sigma = sigma1;
     st->density_dlog = g1;

@@ -549,8 +549,9 @@ static void pfvi_report(struct reb_simulation* r, const struct pfvi_state* st){
             break;
         case PFVI_FAULT_UNRESOLVED_FIXED:
             pfvi_error(r, "pfvi: the fixed step dt = %.6g from t = %.10g spans %.3g radians of the fastest orbit "
-                    "(above " PFVI_STR(PFVI_FIXED_KAPPA_MAX) "): particle %zu's stages describe no motion. Step not "
-                    "taken, state restored. Use a shorter dt or epsilon > 0.", f->h, f->t0, f->bound, f->particle);
+                    "(above " PFVI_STR(PFVI_FIXED_KAPPA_MAX) "): particle %zu%s. Step not "
+                    "taken, state restored. Use a shorter dt or epsilon > 0.", f->h, f->t0, f->bound, f->particle,
+                    f->flag ? " passes its pericentre inside it" : "'s stages describe no motion");
             break;
         case PFVI_FAULT_VARIATIONAL:
             {
@@ -628,6 +629,13 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_option
     }
     if (!isfinite(r->t)){
         pfvi_error(r, "pfvi: sim.t = %g is not finite.", r->t);
+        return 0;
+    }
+    if (!(r->exit_min_distance >= 0.) || isinf(r->exit_min_distance)){
+        // REBOUND squares it, so a negative one would stop its own check but
+        // not pfvi's search inside the step (which reads > 0 as on).
+        pfvi_error(r, "pfvi: sim.exit_min_distance = %g is not valid; it must be finite and >= 0 (0: off). "
+                "Step not taken.", r->exit_min_distance);
         return 0;
     }
     if (r->N_var && r->gravity != REB_GRAVITY_BASIC){
@@ -800,9 +808,12 @@ static double pfvi_fixed_step(struct reb_simulation* r, struct pfvi_state* st, s
     if (check.error > PFVI_FIXED_WARN && !st->fixed_warned){
         st->fixed_warned = 1;
         char msg[REB_STRING_SIZE_MAX];
-        snprintf(msg, sizeof(msg), "pfvi: the fixed step dt = %.6g from t = %.10g: particle %zu's stages imply a "
-                "position error of %.2g per orbit, relative to the orbit (above " PFVI_STR(PFVI_FIXED_WARN) "). Use a "
-                "shorter dt or epsilon > 0. Said once per simulation.", h, t0, check.particle, check.error);
+        // The stages' estimate saturates (pfvi_fixed_step_check): a lower
+        // bound, said so, with the span the density measured.
+        snprintf(msg, sizeof(msg), "pfvi: the fixed step dt = %.6g from t = %.10g spans %.2g radians of the fastest "
+                "orbit; particle %zu's stages imply a position error of at least %.2g per orbit (above "
+                PFVI_STR(PFVI_FIXED_WARN) "). Use a shorter dt or epsilon > 0. Said once per simulation.",
+                h, t0, check.kappa, check.particle, check.error);
         reb_simulation_warning(r, msg);
     }
     pfvi_commit_step(r, st, N, h);
@@ -812,6 +823,32 @@ static double pfvi_fixed_step(struct reb_simulation* r, struct pfvi_state* st, s
 // One step: fixed (epsilon 0) or by the step control.
 static double pfvi_take(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
     return (st->options.epsilon == 0.) ? pfvi_fixed_step(r, st, N, t0) : pfvi_controlled_step(r, st, N, t0);
+}
+
+// The pair of largest G (m_i + m_j)/r^3 (their time scale's inverse omega
+// and separation r), for the message of a step that stopped changing t. O(N^2),
+// on that refusal only. Returns 0 without an attracting pair.
+static int pfvi_tightest_pair(const struct reb_simulation* r, size_t N, size_t* i_out, size_t* j_out,
+        double* separation, double* omega){
+    const struct reb_particle* const p = r->particles;
+    const size_t n_active = (r->N_active < N) ? r->N_active : N;
+    double best = 0.;
+    for (size_t i=0; i<N; i++){
+        for (size_t j=0; j<i && j<n_active; j++){
+            const double m = p[i].m + p[j].m;
+            const double dx = p[i].x - p[j].x, dy = p[i].y - p[j].y, dz = p[i].z - p[j].z;
+            const double r2 = dx*dx + dy*dy + dz*dz + r->softening*r->softening;
+            const double w2 = r->G*m/(r2*sqrt(r2));
+            if (w2 > best && isfinite(w2)){
+                best = w2;
+                *i_out = j;
+                *j_out = i;
+                *separation = sqrt(r2);
+            }
+        }
+    }
+    *omega = sqrt(best);
+    return best > 0.;
 }
 
 /* ------------------------------------------------------------- the step glue
@@ -880,7 +917,13 @@ static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st
     *c = (struct pfvi_call){.t_entry = r->t, .dt_entry = r->dt, .t_target = r->t + r->dt};
     c->finishing = (st->status_at_start == REB_STATUS_LAST_STEP);
     c->eligible = pfvi_output_eligible(r, st);
-    c->shown = c->eligible && pfvi_output_is_shown(r, st);
+    // A sim.dt set by the user since the output (not the one REBOUND left)
+    // is honoured as after any edit, as IAS15 would: the shown state becomes
+    // the user's and the step from it is capped by that dt.
+    // (REBOUND flips its sign for a run backwards: a reversal, not a new dt.)
+    const int user_dt = !c->finishing && st->dt_rebound_leaves != 0.
+        && fabs(c->dt_entry) != fabs(st->dt_rebound_leaves);
+    c->shown = c->eligible && !user_dt && pfvi_output_is_shown(r, st);
     // (Compared only where an output may be shown from the last step's end.
     // A simulation loaded from an archive or copied keeps no end state: it
     // is at the last step's end if t is where that step ended, as REBOUND
@@ -1020,6 +1063,16 @@ static enum pfvi_glue glue_step(struct reb_simulation* r, struct pfvi_state* st,
     if (r->t == t0){
         // t + h rounds to t: REBOUND would call this step for ever.
         pfvi_roll_back(r, st, N, t0);
+        size_t pi, pj;
+        double separation, omega;
+        if (st->options.epsilon > 0. && pfvi_tightest_pair(r, N, &pi, &pj, &separation, &omega)
+                && omega*fabs(t0)*DBL_EPSILON > PFVI_TIGHT_PAIR_ROUNDING){
+            // The adaptive step followed a pair closing in: not dt's fault.
+            pfvi_error(r, "pfvi: particles %zu and %zu collide (%.3g apart at t = %.17g; time scale %.2g, below "
+                    "t's rounding). Not taken, state restored. Give them radii and set sim.collision, or stop "
+                    "first with sim.exit_min_distance.", pi, pj, separation, t0, 1./omega);
+            return PFVI_GLUE_DONE;
+        }
         pfvi_error(r, "pfvi: the step dt = %.3g does not change t = %.17g (it is below the rounding of t); "
                 "step not taken, state restored. Use a larger dt, or start t nearer 0.", h, t0);
         return PFVI_GLUE_DONE;
@@ -1071,6 +1124,7 @@ static enum pfvi_glue glue_show_passed(struct reb_simulation* r, struct pfvi_sta
     }
     return PFVI_GLUE_DONE;
 }
+
 
 static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
     if (!pfvi_options_valid(r, &st->settings)){
@@ -1149,8 +1203,21 @@ static void pfvi_step(struct reb_simulation* r, void* state){
     st->status_at_start = (int)r->status;
     st->dt_at_start = r->dt;
     st->step_N = r->N;
+    // What REBOUND restores sim.dt to after a finish on time (its
+    // last_full_dt): the dt_last_done it saw before the first finishing step,
+    // or, if that was the call's first step, the dt the call began with
+    // (what the last call left, unless the user set one since: then the
+    // user's, honoured either way).
+    const int finishing = (r->status == REB_STATUS_LAST_STEP);
+    if (finishing && !st->last_finishing){
+        st->dt_rebound_leaves = (r->dt_last_done != 0.) ? r->dt_last_done : st->dt_rebound_leaves;
+    }
+    st->last_finishing = finishing;
     pfvi_step_model_keep(r, st);
     pfvi_step_take(r, st);
+    if (!finishing){
+        st->dt_rebound_leaves = r->dt;   // REBOUND keeps what the step left
+    }
     pfvi_step_model_apply_pending(r, st);
     st->in_step = PFVI_STEP_IDLE;
     if (st->free_pending){

@@ -643,7 +643,8 @@ static void newton_correct_unit(struct pfvi_state* st, size_t i, const double (*
         for (int l=0; l<m; l++){
             for (int c=0; c<3; c++){
                 const double bi = yn[vi][l][c] - y[vi][l][c], bp = yn[vp][l][c] - y[vp][l][c];
-                const double cm = (mi*bi + mp*bp)/M;
+                // Tiny masses: as mass fractions (m*b underflows; PFVI_MASS_TINY).
+                const double cm = (M > PFVI_MASS_TINY) ? (mi*bi + mp*bp)/M : (mi/M)*bi + (mp/M)*bp;
                 yn[vi][l][c] = y[vi][l][c] + (cm + (mp/M)*b[l][c]);
                 yn[vp][l][c] = y[vp][l][c] + (cm - (mi/M)*b[l][c]);
             }
@@ -1138,12 +1139,25 @@ static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, 
     double cm_drift[PFVI_STAGES_MAX][3], cm0[3], cmv[3];
     if (pair){
         double cma0[3], cma_old[PFVI_STAGES_MAX][3];
-        for (int c=0; c<3; c++){
-            cm0[c] = (pi->m*q0[c] + mp*xc0[c])/M;
-            cmv[c] = (pi->m*v0[c] + mp*vc0[c])/M;
-            cma0[c] = (pi->m*ai[c] + mp*ac0[c])/M;
-            for (int m=0; rw->extrapolated && m<s; m++){
-                cma_old[m][c] = (pi->m*st->predictor_a[i][m][c] + mp*st->predictor_a[p][m][c])/M;
+        if (M > PFVI_MASS_TINY){
+            for (int c=0; c<3; c++){
+                cm0[c] = (pi->m*q0[c] + mp*xc0[c])/M;
+                cmv[c] = (pi->m*v0[c] + mp*vc0[c])/M;
+                cma0[c] = (pi->m*ai[c] + mp*ac0[c])/M;
+                for (int m=0; rw->extrapolated && m<s; m++){
+                    cma_old[m][c] = (pi->m*st->predictor_a[i][m][c] + mp*st->predictor_a[p][m][c])/M;
+                }
+            }
+        }else{
+            // Tiny masses: the barycentre from mass fractions (PFVI_MASS_TINY).
+            const double wi = pi->m/M, wp = mp/M;
+            for (int c=0; c<3; c++){
+                cm0[c] = wi*q0[c] + wp*xc0[c];
+                cmv[c] = wi*v0[c] + wp*vc0[c];
+                cma0[c] = wi*ai[c] + wp*ac0[c];
+                for (int m=0; rw->extrapolated && m<s; m++){
+                    cma_old[m][c] = wi*st->predictor_a[i][m][c] + wp*st->predictor_a[p][m][c];
+                }
             }
         }
         rest_integral(st, rw, h, cma0, (const double (*)[3])cma_old, cm_drift);

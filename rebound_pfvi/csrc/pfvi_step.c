@@ -121,6 +121,61 @@ void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* st, size_t N,
     stats->omega_max = st->trial.omega_max;
 }
 
+// The resolution of the pulls on particle i beyond its partner's (issue 40):
+// a weak pull that varies within the step (a retrograde body passing
+// Jupiter, 1e-3 of the Sun's pull) leaves an error proportional to its
+// size F times (h/tau)^(2s - 2), while its share of the stages' leading
+// coefficient D_p is F (h/tau)^(s - 1)/(s - 1)!: measured against the net
+// acceleration alone (|D_p|/A) it reads sqrt(F/A) times too fine. Returned
+// as |D_p|/sqrt(A F), the ratio a Kepler pull of the same error shows
+// (A: the largest stage acceleration, or the largest pull if pull2 >= 0),
+// times sqrt(PFVI_WEAK_PULL_MARGIN); 0 without a massive partner. Only for
+// the symmetric control, which refreshed st->partners for this step.
+static double pfvi_weak_pull_resolution(const struct reb_simulation* r, const struct pfvi_state* st, size_t N, size_t i,
+        const struct pfvi_field* field, const double* weights, const double (*a)[3], double pull2){
+    const struct pfvi_partner* const q = &st->partners[i];
+    if (q->j >= N || q->j == i || q->image >= field->n_images || !(r->particles[q->j].m > 0.) || !(field->G > 0.)){
+        return 0.;
+    }
+    if (N < 3 && field->n_images == 1 && !r->additional_forces){
+        return 0.;    // two bodies alone: no pull but the partner's
+    }
+    const int s = st->options.stages;
+    const struct pfvi_scheme* const scheme = pfvi_scheme_of(st);
+    double xi[PFVI_STAGES_MAX][3], xj[PFVI_STAGES_MAX][3], rest[PFVI_STAGES_MAX][3];
+    scheme->stage_positions(r, st, i, xi);
+    scheme->stage_positions(r, st, q->j, xj);
+    const struct reb_vec6d* const sh = &field->images[q->image];
+    const double shift[3] = {sh->x, sh->y, sh->z};
+    const double Gm = field->G*r->particles[q->j].m;
+    double A2 = 0., F2 = 0.;
+    for (int k=0; k<s; k++){
+        double d[3];
+        for (int c=0; c<3; c++){
+            d[c] = (xj[k][c] + shift[c]) - xi[k][c];
+        }
+        const double r2 = (d[0]*d[0] + d[1]*d[1] + d[2]*d[2]) + field->softening2;
+        const double pull = Gm/(r2*sqrt(r2));
+        for (int c=0; c<3; c++){
+            rest[k][c] = a[k][c] - pull*d[c];
+        }
+        const double a2 = a[k][0]*a[k][0] + a[k][1]*a[k][1] + a[k][2]*a[k][2];
+        const double f2 = rest[k][0]*rest[k][0] + rest[k][1]*rest[k][1] + rest[k][2]*rest[k][2];
+        A2 = (a2 > A2) ? a2 : A2;
+        F2 = (f2 > F2) ? f2 : F2;
+    }
+    A2 = fmax(A2, pull2);
+    if (!(F2 > 0.) || !(A2 > 0.) || !(F2 < A2)){
+        return 0.;    // no weaker pull: the check against A covers it
+    }
+    // |D_p|/F from the rest's own stage values.
+    const double dp = pfvi_stage_resolution((const double (*)[3])rest, (const double (*)[3])rest, weights, s, 0.);
+    // Held PFVI_WEAK_PULL_MARGIN times below a Kepler orbit's error (the
+    // error goes as the ratio squared).
+    const double ratio = sqrt(PFVI_WEAK_PULL_MARGIN)*dp*sqrt(sqrt(F2/A2));
+    return isfinite(ratio) ? ratio : 0.;
+}
+
 struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, const struct pfvi_state* st, size_t N,
         double h, const struct pfvi_field* field, double pull_above, int residual){
     const struct pfvi_scheme* const scheme = pfvi_scheme_of(st);
@@ -152,12 +207,27 @@ struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, con
         }
         const double (*const values)[3] = (omega != 0.) ? (const double (*)[3])f : (const double (*)[3])a;
         double ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, 0.);
+        double pull2 = -1.;    // the largest pull's square, once measured
         if (field && ratio > pull_above){
             // Unresolved against its net acceleration: measured against the
             // largest pull on it at either end (pfvi_timescales.c).
             const double pull0 = pfvi_largest_pull2(st->start, N, field, i);
             const double pull1 = pfvi_largest_pull2(r->particles, N, field, i);
-            ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, fmax(pull0, pull1));
+            pull2 = fmax(pull0, pull1);
+            ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, pull2);
+        }
+        if (field && !residual && omega == 0. && st->partners){
+            const double weak = pfvi_weak_pull_resolution(r, st, N, i, field, weights, (const double (*)[3])a, pull2);
+            if (weak > ratio && field && weak > pull_above && pull2 < 0.){
+                // Measured against the largest pull too, as above.
+                const double pull0 = pfvi_largest_pull2(st->start, N, field, i);
+                const double pull1 = pfvi_largest_pull2(r->particles, N, field, i);
+                const double again = pfvi_weak_pull_resolution(r, st, N, i, field, weights, (const double (*)[3])a,
+                    fmax(pull0, pull1));
+                ratio = fmax(ratio, again);
+            }else{
+                ratio = fmax(ratio, weak);
+            }
         }
         if (ratio > worst.ratio || (ratio != ratio && worst.ratio == worst.ratio)){
             worst = (struct pfvi_resolution){ratio, i};
@@ -187,6 +257,51 @@ static double factorial_of(int n){
     return f;
 }
 
+// The largest angle h n_q (n_q = (mu (1 + e)/q^3)^(1/2), the rate at
+// pericentre q) over the bodies whose bound two-body orbit about their
+// partner (at the step's start p) reaches its pericentre within the step:
+// the densities at a step's ends do not see a pericentre between them (e =
+// 0.9 at 3 steps per orbit: ends 2.6 radians apart, the body ejected).
+static double pericentre_span(const struct reb_particle* p, size_t N, const struct pfvi_field* f,
+        const struct pfvi_partner* partners, double h, size_t* worst){
+    double largest = 0.;
+    for (size_t i=0; i<N; i++){
+        const size_t j = partners[i].j;
+        if (j >= N || partners[i].image >= f->n_images){
+            continue;
+        }
+        const struct reb_vec6d* const sh = &f->images[partners[i].image];
+        const double r[3] = {p[i].x - (p[j].x + sh->x), p[i].y - (p[j].y + sh->y), p[i].z - (p[j].z + sh->z)};
+        const double v[3] = {p[i].vx - (p[j].vx + sh->vx), p[i].vy - (p[j].vy + sh->vy), p[i].vz - (p[j].vz + sh->vz)};
+        const double mu = f->G*(p[i].m + p[j].m);
+        const double rn = sqrt(r[0]*r[0] + r[1]*r[1] + r[2]*r[2]);
+        const double v2 = v[0]*v[0] + v[1]*v[1] + v[2]*v[2];
+        const double rv = r[0]*v[0] + r[1]*v[1] + r[2]*v[2];
+        const double inv_a = 2./rn - v2/mu;
+        if (!(mu > 0.) || !(rn > 0.) || !(inv_a > 0.)){
+            continue;   // unbound or degenerate: no pericentre ahead to time
+        }
+        const double a = 1./inv_a;
+        const double n = sqrt(mu*inv_a*inv_a*inv_a);
+        const double ec = 1. - rn*inv_a, es = rv/sqrt(mu*a);   // e cos E, e sin E
+        const double e = sqrt(ec*ec + es*es);
+        const double M = atan2(es, ec) - es;                    // in (-pi, pi]: 0 at pericentre
+        // Time from the start to the pericentre in the step's direction.
+        const double to_peri = (h > 0.) ? ((M <= 0.) ? -M : 2.*M_PI - M)/n : ((M >= 0.) ? M : 2.*M_PI + M)/n;
+        if (!(to_peri <= fabs(h)) || !(e < 1.)){
+            continue;
+        }
+        const double q = a*(1. - e);
+        const double span = fabs(h)*sqrt(mu*(1. + e)/(q*q*q));
+        // (>=: of a mutual pair, the later body, usually the lighter, is named)
+        if (span >= largest && isfinite(span)){
+            largest = span;
+            *worst = i;
+        }
+    }
+    return largest;
+}
+
 int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
         struct pfvi_fixed_check* out){
     const int s = st->options.stages;
@@ -204,6 +319,7 @@ int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_
     out->error = pfvi_resolution_error(s, out->u);
     out->particle = worst.particle;
     out->kappa = 0.;
+    out->pericentre = SIZE_MAX;
     out->refuse = 0;
     // The largest u any stage values give: |D| <= sum |w_k| A.
     double weights_sum = 2.;
@@ -214,7 +330,10 @@ int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_
         }
     }
     const double u_bound = pow(factorial_of(s - 1)*weights_sum, 1./(s - 1.));
-    if (!(out->u <= PFVI_FIXED_GATE*u_bound)){
+    // (Also at the warning level: the estimate saturates, and a step across
+    // the pericentre of e = 0.9 at 3 steps per orbit read 0.093 per orbit
+    // while it ejected the body: issue 40.)
+    if (!(out->u <= PFVI_FIXED_GATE*u_bound) || out->error > PFVI_FIXED_WARN){
         // The stages' estimate is bounded (|D| <= sum |w_k| A): at s = 8 it
         // stays below 0.01 however long the step, and a step over several
         // orbits can converge to a root that is no motion at all. So a step
@@ -226,7 +345,10 @@ int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_
         pfvi_step_density(st->start, st->end, N, &field, s, st->partners, &sigma0, &g);
         pfvi_step_density(r->particles, NULL, N, &field, s, st->partners, &sigma1, &g);
         const double sigma = fmax(sigma0, sigma1);
-        out->kappa = fabs(h)*sigma;
+        size_t passing = SIZE_MAX;
+        const double peri = pericentre_span(st->start, N, &field, st->partners, h, &passing);
+        out->kappa = fmax(fabs(h)*sigma, peri);
+        out->pericentre = (peri > fabs(h)*sigma) ? passing : SIZE_MAX;
         if (out->kappa > PFVI_FIXED_KAPPA_MAX){
             out->refuse = 1;
         }
@@ -234,7 +356,9 @@ int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_
     st->statistics.error_estimate = out->error;
     if (out->refuse){
         pfvi_roll_back(r, st, N, t0);
-        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_UNRESOLVED_FIXED, .particle = out->particle, .h = h,
+        const int peri = (out->pericentre != SIZE_MAX);
+        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_UNRESOLVED_FIXED,
+            .particle = peri ? out->pericentre : out->particle, .flag = peri, .h = h,
             .t0 = t0, .value = out->error, .bound = out->kappa};
     }
     return !out->refuse;

@@ -317,6 +317,7 @@ struct density_sum {
 };
 
 typedef char pfvi_density_norm_is_8[(PFVI_DENSITY_NORM == 8) ? 1 : -1];
+typedef char pfvi_encounter_fast_power_is_4[(PFVI_ENCOUNTER_FAST_POWER == 4) ? 1 : -1];
 
 // x^K by squaring.
 static inline double power_K(double x){
@@ -393,12 +394,19 @@ struct encounter_pair {
     int order;          // 2s - 2
 };
 
-// The weight (R/(1 + R))^(1/(2s - 2)) of a pair's encounter term, R = R_i +
-// R_j its pull on each body against the body's partner (pfvi.h,
-// PFVI_ENCOUNTER_WEIGHTED), and d log(weight)/dt; 1 where the pair is either
-// body's tightest. Returns 0 where the weight is 0.
-static int encounter_weight(const struct encounter_pair* q, const double d[3], const double w[3], double least,
-        double* weight, double* dlog){
+// The weight (R'/(1 + R'))^(1/(2s - 2)) of a pair's encounter term and d
+// log(weight)/dt; 1 where the pair is either body's tightest. R' = R + X^p:
+// R = R_i + R_j the pair's pull on each body against the body's partner
+// (pfvi.h, PFVI_ENCOUNTER_WEIGHTED), X = nu_cr^2/(G (S_i + S_j)) its crossing
+// rate against the bodies' partner frequencies (S the partner stiffness
+// (m_i + m_j)/r^3), p = PFVI_ENCOUNTER_FAST_POWER. A slow pair (planets about
+// a star passing each other, X ~ 0.1) keeps the weight its pull gives; a
+// pair that crosses faster than the bodies orbit (a retrograde body passing
+// Jupiter, X ~ 2) is weighted 1, as it was before the weighting: the step
+// track could not follow a weighted term through a passage shorter than a
+// step (issue 40). Returns 0 where the weight is 0.
+static int encounter_weight(const struct encounter_pair* q, const double d[3], const double w[3], const double b[3],
+        double least, double* weight, double* dlog){
     *weight = 1.;
     *dlog = 0.;
     if (!(q->exponent > 0.)){
@@ -415,7 +423,27 @@ static int encounter_weight(const struct encounter_pair* q, const double d[3], c
     if (!isfinite(R_j)){
         return 1;
     }
-    const double R = R_i + R_j;
+    // The crossing rate against the partner frequencies (each partner's
+    // stiffness changes as its pull does, to the power 3/2).
+    const struct pfvi_partner* const pi = &q->partners[q->i];
+    const struct pfvi_partner* const pj = &q->partners[q->j];
+    const double S_i = (pi->pull > 0.) ? pi->stiffness : 0., S_j = (pj->pull > 0.) ? pj->stiffness : 0.;
+    const double S = S_i + S_j;
+    double Q = 0., dQ = 0.;
+    if (S > 0.){
+        const double rs2 = (d[0]*d[0] + d[1]*d[1] + d[2]*d[2]) + q->f->softening2;
+        const double v2 = w[0]*w[0] + w[1]*w[1] + w[2]*w[2];
+        const double X = v2/(rs2*q->f->G*S);
+        const double dlog_X = 2.*(w[0]*b[0] + w[1]*b[1] + w[2]*b[2])/v2 - 2.*(d[0]*w[0] + d[1]*w[1] + d[2]*w[2])/rs2
+            - 1.5*(S_i*pi->dlog_pull + S_j*pj->dlog_pull)/S;
+        const double X2 = X*X;
+        Q = X2*X2;
+        dQ = PFVI_ENCOUNTER_FAST_POWER*dlog_X*Q;
+        if (!isfinite(Q) || !isfinite(dQ)){
+            return 1;
+        }
+    }
+    const double R = R_i + R_j + Q;
     // A weight below `least` (the term would be negligible): no pow().
     double floor = 1.;
     for (int k=0; k<q->order; k++){
@@ -425,7 +453,7 @@ static int encounter_weight(const struct encounter_pair* q, const double d[3], c
         return 0;
     }
     *weight = pow(R/(1. + R), q->exponent);
-    *dlog = q->exponent*(R_i*dlog_i + R_j*dlog_j)/(R*(1. + R));
+    *dlog = q->exponent*(R_i*dlog_i + R_j*dlog_j + dQ)/(R*(1. + R));
     return isfinite(*weight) && isfinite(*dlog);
 }
 
@@ -452,7 +480,7 @@ static void encounter_term(const double d[3], const double w[3], const double b[
     double weight = 1., dlog_weight = 0.;
     // The weight the term needs to reach `negligible` (it is below nu_cr (1 + c C) weight).
     const double least = negligible*sqrt(rs2/v2)/boost;
-    if (!encounter_weight(pair, d, w, least, &weight, &dlog_weight)){
+    if (!encounter_weight(pair, d, w, b, least, &weight, &dlog_weight)){
         return;
     }
     const double rs = sqrt(rs2);
