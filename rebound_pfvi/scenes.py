@@ -1163,7 +1163,7 @@ class SolarSystem(Scene):
 
     @property
     def slug(self) -> str:
-        return f"solar-system-{self.years:g}yr"
+        return f"solar-system-{self.years:g}yr" + ("" if self.gr else "-newtonian")
 
     def output_times(self) -> List[float]:
         """The times of the outputs (yr from the epoch), the last at t_end."""
@@ -1221,7 +1221,7 @@ class SolarSystem(Scene):
         return (f"Solar system from DE421: the Sun, eight planets, the Moon and Pluto from JD {self.epoch:.1f} TDB "
                 f"({_jd_text(self.epoch)}), {self.years:g} yr with an output every {self.every:g} days (fixed "
                 f"steps counted per output), "
-                f"{'GR (REBOUNDx gr_full)' if self.gr else 'Newtonian (no GR: REBOUNDx is not installed)'}")
+                f"{'GR (REBOUNDx gr_full)' if self.gr else 'Newtonian (no GR)'}")
 
 
 SCENES[SolarSystem.name] = SolarSystem
