@@ -939,11 +939,19 @@ def _jd_text(jd: float) -> str:
     return Time(jd, format="jd", scale=EPOCH_SCALE).iso[:10]
 
 
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def de421_epoch(epoch: Any) -> Tuple[float, float]:
     """An epoch as a two-part Julian date (TDB): an astropy ``Time`` (any
-    scale; converted to TDB), a plain number (a Julian date in TDB), or a
-    string astropy reads as a date in TDB ("2000-01-01 12:00",
-    "2000-01-01T12:00:00"). An error names the epoch when it is none of these
+    scale; converted to TDB), a plain number or a string of one (a Julian
+    date in TDB), or a string astropy reads as a date in TDB ("2000-01-01
+    12:00", "2000-01-01T12:00:00"). An error names the epoch when it is none of these
     or lies outside DE421's span."""
     if isinstance(epoch, bool):
         raise ValueError(f"epoch={epoch!r} is not an epoch; give an astropy Time, a Julian date (TDB) or an ISO date")
@@ -952,6 +960,8 @@ def de421_epoch(epoch: Any) -> Tuple[float, float]:
             raise ValueError(f"epoch={epoch!r}: give one time, not an array of them")
         tdb = epoch.tdb
         jd1, jd2 = float(tdb.jd1), float(tdb.jd2)
+    elif isinstance(epoch, str) and _is_number(epoch):  # a Julian date as text (the command line's --epoch)
+        jd1, jd2 = _number(float(epoch), "epoch"), 0.0
     elif isinstance(epoch, str):
         from astropy.time import Time
 

@@ -7,8 +7,10 @@ first test runs everywhere. `pytest -k solar_system` selects this file.
 """
 import json
 import math
+import re
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -86,7 +88,8 @@ def test_epochs_as_julian_date_iso_string_and_astropy_time():
         p = scenes.solar_system(epoch, gr=False).particles["Earth"]
         return (p.x, p.y, p.z)
 
-    assert earth("2000-01-01 12:00") == earth(J2000) == earth(Time(J2000, format="jd", scale="tdb"))
+    assert earth("2000-01-01 12:00") == earth(J2000) == earth(Time(J2000, format="jd", scale="tdb")) \
+        == earth("2451545.0")
     # A Time in UTC is converted to TDB (64.18 s later at J2000): the Earth moves ~1900 km in that time.
     utc = Time("2000-01-01 12:00", scale="utc")
     # (a Julian date in one double resolves 40 us: 1.3 m of the Earth's motion)
@@ -180,3 +183,24 @@ def test_cli_epoch_error_names_the_option(capsys):
     assert stop.value.code == 2
     err = capsys.readouterr().err
     assert "argument --epoch: epoch='1700-01-01'" in err and "outside DE421's span" in err
+
+
+def _page_snippets():
+    page = Path(__file__).resolve().parent.parent / "docs" / "solar-system.md"
+    # ```py, not ```python: tests/test_docs.py runs those without the extra; this file runs these with it.
+    return re.findall(r"```py\n(.*?)```", page.read_text(encoding="utf-8"), re.S)
+
+
+def test_the_page_has_snippets():
+    assert _page_snippets()
+
+
+@needs_ephemeris
+@pytest.mark.slow
+@pytest.mark.parametrize("code", _page_snippets())
+def test_page_snippet_runs_saved_as_a_script(code, tmp_path):
+    script = tmp_path / "snippet.py"
+    script.write_text(code, encoding="utf-8")
+    done = subprocess.run([sys.executable, "-P", str(script)], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
