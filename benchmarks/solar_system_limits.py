@@ -3,7 +3,7 @@ distance from DE421 over the outputs, for the model with and without GR and
 with the Earth's J2, each integrated by pfvi (its defaults) and IAS15 (its
 default epsilon).
 
-    python3 -P benchmarks/solar_system_limits.py [--epoch 2000-01-01] [--years 10] [--every 10]
+    python3 -P benchmarks/solar_system_limits.py [--epoch 2000-01-01] [--years 10] [--every 10] [--interleave 3]
 
 Needs the ephemeris extra (pip install ".[ephemeris]") and, for GR and J2,
 the reboundx extra. The models:
@@ -19,6 +19,11 @@ What no model here has: the asteroids (DE421 integrates 343 of them and
 Ceres, Pallas and Vesta with their own GM, GMAST1-3 in its constants, but
 gives none of their states), the Moon's figure and librations, and the
 Earth's tides on the Moon.
+
+--interleave N then times pfvi's defaults and IAS15's with GR, as the
+model is integrated with outputs, alternately N times each in this one
+process (so that both see the same load), and prints each one's best and
+median wall time and their ratio.
 """
 import argparse
 import time
@@ -65,11 +70,36 @@ def run(scene, model, integrator):
     return wall, errors["DE421"], errors["IAS15"]
 
 
+def interleaved(scene, repeats):
+    """Best and median wall times of pfvi and IAS15 (GR, their defaults), run alternately."""
+    import statistics
+
+    import rebound_pfvi  # noqa: F401
+
+    walls = {"pfvi": [], "ias15": []}
+    for _ in range(repeats):
+        for integrator in walls:
+            sim = build(scene.epoch, "GR")
+            sim.integrator = integrator
+            tick = time.perf_counter()
+            for t in scene.output_times():
+                sim.integrate(t, exact_finish_time=1)
+                [(p.x, p.y, p.z) for p in sim.particles]
+            walls[integrator].append(time.perf_counter() - tick)
+    print(f"\nWall time with the outputs, GR, each integrator at its defaults, run alternately {repeats} times:\n")
+    print("| integrator | best [s] | median [s] |\n|---|---|---|")
+    for integrator, w in walls.items():
+        print(f"| {integrator} | {min(w):.3g} | {statistics.median(w):.3g} |")
+    print(f"\npfvi / IAS15: {min(walls['pfvi']) / min(walls['ias15']):.2f} (best), "
+          f"{statistics.median(walls['pfvi']) / statistics.median(walls['ias15']):.2f} (median)")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--epoch", default="2000-01-01", help="ISO date (TDB) or Julian date (default 2000-01-01)")
     parser.add_argument("--years", type=float, default=10.0)
     parser.add_argument("--every", type=float, default=10.0, help="days between outputs")
+    parser.add_argument("--interleave", type=int, default=0, help="time pfvi and IAS15 alternately N times each")
     args = parser.parse_args()
     scene = scenes.SolarSystem(epoch=args.epoch, years=args.years, every=args.every, gr=False)
     bodies = scenes.DE421_BODIES
@@ -83,6 +113,8 @@ def main():
             wall, de421, ias15 = run(scene, model, integrator)
             print(f"| {model} | {integrator} | {wall:.3g} | " + " | ".join(f"{de421[b]:.3g}" for b in bodies)
                   + f" | {max(ias15.values()):.2g} |", flush=True)
+    if args.interleave:
+        interleaved(scene, args.interleave)
 
 
 if __name__ == "__main__":
