@@ -848,18 +848,7 @@ class MercuryGR(Scene):
         gr.params["c"] = SPEED_OF_LIGHT_AU_YR
         sim.force_is_velocity_dependent = 1
         if counter is not None:
-            import ctypes
-
-            # A copy of REBOUNDx's C function pointer: the field itself is a
-            # view of the simulation's memory, which the line below overwrites.
-            field = sim._additional_forces
-            rebx_forces = type(field)(ctypes.cast(field, ctypes.c_void_p).value)
-
-            def counted(simp):
-                counter[0] += 1
-                rebx_forces(simp)
-
-            sim.additional_forces = counted
+            _count_forces(sim, counter)
         return sim
 
     @property
