@@ -119,6 +119,21 @@ def test_bad_epochs_are_named(epoch, match):
 
 
 @needs_ephemeris
+def test_scene_outputs_and_their_interval():
+    import astropy.units as u
+
+    scene = scenes.SolarSystem(years=1, every=30 * u.day, gr=False)
+    assert scene.every == pytest.approx(30.0)
+    times = scene.output_times()
+    assert len(times) == 13 and times[0] == pytest.approx(30 / 365.25) and times[-1] == 1.0
+    assert scenes.SolarSystem(years=1, every="1 week", gr=False).every == pytest.approx(7.0)
+    with pytest.raises(ValueError, match=r"every=-1 must be positive"):
+        scenes.SolarSystem(every=-1, gr=False)
+    with pytest.raises(ValueError, match=r"every=400 days is longer than the run"):
+        scenes.SolarSystem(years=1, every=400, gr=False)
+
+
+@needs_ephemeris
 def test_run_past_de421s_end_is_refused():
     start, end = scenes.de421_span()
     with pytest.raises(ValueError, match=r"years=10: the run would end .* after DE421's span ends"):
