@@ -7,7 +7,9 @@ Each setting is run by :func:`run_setting`, which
 1. times ``sim.integrate(t_end)`` from a fresh simulation ``repeats`` times
    and keeps the best (least) wall time; the final state of the timed run
    gives the final relative energy error and the position error against the
-   scene's reference;
+   scene's reference (a scene with ``output_times()``, the solar system,
+   integrates to each output instead and reads every position there, inside
+   the timed loop: its ``output_errors`` become the run's ``bodies``);
 2. runs once more, untimed, stopping at ``samples`` evenly spaced times
    without changing the steps (``exact_finish_time=0``; exactly at them for
    a scene whose energy holds only within the run) to find the largest
