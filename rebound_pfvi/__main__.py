@@ -35,6 +35,11 @@ SCENE_OPTIONS = {
     "--a-outer": ("a_outer", "length", ("triple",), "companion's semi-major axis"),
     "--omega": ("omega", "frequency", ("oscillator",), 'angular frequency, e.g. "6.283 1/yr"'),
     "--amplitude": ("amplitude", "length", ("oscillator",), "semi-major axis of the oscillator's ellipse"),
+    "--epoch": ("epoch", "epoch", ("solar-system",),
+                'start: an ISO date (TDB), e.g. "1900-01-01", or a Julian date (TDB); default J2000'),
+    "--years": ("years", "number", ("solar-system",), "length of the run in Julian years (default 10)"),
+    "--every": ("every", "number", ("solar-system",), "days between outputs (default 10)"),
+    "--no-gr": ("gr", "off", ("solar-system",), "leave out GR (default: REBOUNDx's gr_full where it is installed)"),
 }
 
 
@@ -157,11 +162,17 @@ def build_parser() -> argparse.ArgumentParser:
                               "passing Jupiter at 0.34 AU), retrograde (a body crossing Jupiter's orbit), "
                               "sungrazer (q = 0.02 AU beside Jupiter), circumbinary (a Kepler-16-like planet), "
                               "outer-solar-system (the giant planets and a Pluto-like body), periodic-box "
-                              "(softened bodies meeting through a periodic boundary). The parameters each takes "
+                              "(softened bodies meeting through a periodic boundary); solar-system: the Sun, "
+                              "planets, Moon and Pluto from JPL's DE421, 10 yr with an output every 10 days, "
+                              "measured against DE421 (the [ephemeris] extra). The parameters each takes "
                               "are in brackets below")
     for option, (_, kind, scenes, text) in SCENE_OPTIONS.items():
-        compare.add_argument(option, type=_number(kind) if kind == "number" else _quantity(kind), default=None,
-                             help=f"{text} [{', '.join(scenes)}]")
+        if kind == "off":  # a switch: the scene's keyword set to False
+            compare.add_argument(option, action="store_const", const=False, default=None,
+                                 help=f"{text} [{', '.join(scenes)}]")
+            continue
+        parse = _number(kind) if kind == "number" else str if kind == "epoch" else _quantity(kind)
+        compare.add_argument(option, type=parse, default=None, help=f"{text} [{', '.join(scenes)}]")
     compare.add_argument("--integrators", type=_families, default=None,
                          help="comma-separated families to run (default: all that apply to the scene)")
     compare.add_argument("--full", action="store_true", help="the full sweep (more settings, s = 6 too)")

@@ -7,7 +7,9 @@ Each setting is run by :func:`run_setting`, which
 1. times ``sim.integrate(t_end)`` from a fresh simulation ``repeats`` times
    and keeps the best (least) wall time; the final state of the timed run
    gives the final relative energy error and the position error against the
-   scene's reference;
+   scene's reference (a scene with ``output_times()``, the solar system,
+   integrates to each output instead and reads every position there, inside
+   the timed loop: its ``output_errors`` become the run's ``bodies``);
 2. runs once more, untimed, stopping at ``samples`` evenly spaced times
    without changing the steps (``exact_finish_time=0``; exactly at them for
    a scene whose energy holds only within the run) to find the largest
@@ -38,7 +40,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from . import DEFAULTS, runner, runs, verdict
-from .integrators import FAMILIES, pfvi_label, pfvi_options
+from .integrators import FAMILIES, WHFAST_CORRECTED, pfvi_label, pfvi_options
 from .integrators import configure as configure_integrator
 from .runs import ProgressCallback, Run
 
@@ -133,12 +135,6 @@ PFVI_FIXED_LINES = ((("stages", 2), ("fitting", "phase"), ("step_control", "reve
                     (("stages", 4), ("fitting", "exact")))
 IAS15_EPSILONS = {"quick": (1e-3, 1e-5, 1e-7, 1e-9), "full": tuple(10.0 ** -k for k in range(2, 10))}
 BS_EPS = {"quick": (1e-4, 1e-7, 1e-10, 1e-13), "full": tuple(10.0 ** -k for k in range(4, 14))}
-#: WHFast's symplectic corrector (Wisdom, Holman & Touma 1996), the line
-#: beside plain WHFast, with safe_mode 0 as REBOUND advises for it: in safe
-#: mode every step is synchronized, which applies the corrector and its
-#: inverse each step (measured: 33x the wall time on the outer solar system
-#: at 1000 steps per period, the same error).
-WHFAST_CORRECTED = (("corrector", 11), ("safe_mode", 0))
 FIXED_STEPS = {"quick": (100, 1000, 10000), "full": (30, 100, 300, 1000, 3000, 10000, 30000)}
 
 
@@ -146,8 +142,8 @@ def default_settings(scene: Scene, size: str = "quick",
                      families: Optional[Sequence[str]] = None) -> List[Setting]:
     """The sweep for `scene`: pfvi stages x fitting x epsilon (and the scene's
     frequency options), IAS15 epsilon, BS tolerance, WHFast (plain and with
-    corrector 11), LEAPFROG, TRACE and MERCURIUS steps per period. `families`
-    restricts it."""
+    corrector 11), LEAPFROG, TRACE and MERCURIUS steps per period; or the
+    scene's own (``scene.sweep``, the solar system's). `families` restricts it."""
     if size not in ("quick", "full"):
         raise ValueError(f"size={size!r} is not valid; allowed: quick, full")
     families = tuple(families or scene.families)
@@ -158,7 +154,10 @@ def default_settings(scene: Scene, size: str = "quick",
     for family in families:
         if family not in scene.families:
             continue
-        if family == "pfvi":
+        if scene.sweep is not None:  # the scene's own sweep (its size fixed: it fits the scene's budget)
+            settings += [Setting(family, value, tuple(options))
+                         for options, values in scene.sweep.get(family, ()) for value in values]
+        elif family == "pfvi":
             for frequency in scene.pfvi_frequencies:
                 lines = PFVI_LINES[size] if frequency is None else PFVI_FIXED_LINES
                 for line in lines:
@@ -267,6 +266,11 @@ def _integrate(sim: rebound.Simulation, t: float, exact_finish_time: int, deadli
         raise _OverBudget(progress())
 
 
+def _positions(sim: rebound.Simulation) -> List[Tuple[float, float, float]]:
+    """Every particle's position, as a run with outputs reads them."""
+    return [(p.x, p.y, p.z) for p in sim.particles]
+
+
 def _run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repeats: int, samples: int,
                  budget: Optional[float] = None) -> Run:
     run = _identity(scene, setting)
@@ -282,13 +286,22 @@ def _run_setting(scene: Scene, setting: Setting, reference: Dict[str, Any], repe
         sim = scene.build()
         t0 = sim.t
         walls = []
+        outputs = scene.output_times()
         for _ in range(max(1, int(repeats))):
             sim = scene.build()
             configure(sim, scene, setting)
             E0 = scene.energy(sim)
+            states = []
             tick = time.perf_counter()
-            _integrate(sim, t_end, 1, deadline, fraction)
+            if outputs is None:
+                _integrate(sim, t_end, 1, deadline, fraction)
+            else:  # as a user takes outputs: to each time exactly, reading the positions there
+                for t_out in outputs:
+                    _integrate(sim, t_out, 1, deadline, fraction)
+                    states.append(_positions(sim))
             walls.append(time.perf_counter() - tick)
+        if outputs is not None:
+            run.bodies = scene.output_errors(states, reference)
         final = abs(scene.energy(sim) / E0 - 1.0)
         position = scene.position_error(sim, reference)
         relative = scene.relative_position_error(sim, reference)

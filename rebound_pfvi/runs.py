@@ -90,6 +90,9 @@ class Run:
     positions: Optional[List[Vector]] = None  # stability: every particle's position at t (not written)
     finite: Optional[bool] = None  # stability: whether that state is finite
     warnings: List[str] = field(default_factory=list)  # compare: REBOUND's warnings during the run
+    #: compare, a scene with outputs (the solar system): each body's largest
+    #: error over the outputs, {against: {body: km}} (Scene.output_errors)
+    bodies: Optional[Dict[str, Any]] = None
     what_happened: str = ""  # stability: the verdict's detail and what pfvi counted, for the page
 
     @property
@@ -119,6 +122,8 @@ class Run:
                 row.update({key: self.pfvi[name] for key, name in _COMPARE_PFVI.items()})
             if self.energy_error_max is not None:  # the sampled rerun finished
                 row.update(energy_error_max=self.energy_error_max, force_evaluations=self.force_evaluations)
+            if self.bodies is not None:
+                row["bodies"] = self.bodies
             row.update(verdict=self.verdict, verdict_detail=self.verdict_detail, warnings=list(self.warnings))
             return row
         row = {"case": self.scene, "integrator": self.label, "family": self.family,
@@ -147,7 +152,7 @@ class Run:
                        energy_error_max=row.get("energy_error_max"), position_error=row.get("position_error"),
                        relative_position_error=row.get("relative_position_error"),
                        force_evaluations=row.get("force_evaluations"), pfvi=pfvi,
-                       warnings=list(row.get("warnings", ())))
+                       warnings=list(row.get("warnings", ())), bodies=row.get("bodies"))
         # (n_unresolved: reports written before it existed have none)
         pfvi = {key: row.get(key, 0) for key in _STABILITY_PFVI} if "n_steps" in row else None
         options = {"fitting": row.get("fitting"), "stages": row.get("stages"), "epsilon": row.get("epsilon")}

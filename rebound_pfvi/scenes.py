@@ -25,6 +25,7 @@ from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any, Dict, List, Optional, Tuple, cast
 
 from . import units
+from .integrators import WHFAST_CORRECTED
 
 if TYPE_CHECKING:
     import rebound
@@ -119,6 +120,9 @@ class Scene:
     #: times (BS with exact_finish_time = 0 was seen to stop well past t_end,
     #: and before the start, in REBOUND 5.2.2).
     energy_until_t_end = False
+    #: The scene's own sweep, {family: ((options, knob values), ...)}, in
+    #: place of compare's default settings; None: compare's.
+    sweep: Optional[Dict[str, Tuple[Tuple[Tuple[Tuple[str, Any], ...], Tuple[float, ...]], ...]]] = None
 
     @property
     def params(self) -> Dict[str, Any]:
@@ -145,6 +149,16 @@ class Scene:
     def slug(self) -> str:
         """A file name for this scene's results, e.g. kepler-e0.95."""
         return f"{self.name}-e{self.e:g}" if hasattr(self, "e") else self.name
+
+    def output_times(self) -> Optional[List[float]]:
+        """The times a run stops at and reads the positions, inside its timed
+        loop (as a user takes outputs); None: one integrate() to t_end."""
+        return None
+
+    def output_errors(self, states: List[List[Vector]], reference: Dict[str, Any]) -> Optional[Dict[str, Any]]:
+        """What the positions at the outputs (one list per output time) tell
+        against the reference; for a scene with output_times()."""
+        return None
 
     def configure_pfvi(self, sim: rebound.Simulation, frequency: str) -> None:
         """Scene-specific pfvi options (the oscillator's known frequency)."""
@@ -775,12 +789,12 @@ def _positive(number: float, name: str, given: Any = None) -> float:
     return number
 
 
-def _reboundx() -> Any:
+def _reboundx(what: str = "scene 'mercury-gr'") -> Any:
     """REBOUNDx, imported on first use, or an error naming the extra."""
     try:
         import reboundx
     except ImportError as error:
-        raise MissingExtra("scene 'mercury-gr' needs REBOUNDx, which is not installed: pip install "
+        raise MissingExtra(f"{what} needs REBOUNDx, which is not installed: pip install "
                            "\"rebound_pfvi[reboundx]\" (from a clone: pip install \".[reboundx]\")") from error
     return reboundx
 
@@ -834,18 +848,7 @@ class MercuryGR(Scene):
         gr.params["c"] = SPEED_OF_LIGHT_AU_YR
         sim.force_is_velocity_dependent = 1
         if counter is not None:
-            import ctypes
-
-            # A copy of REBOUNDx's C function pointer: the field itself is a
-            # view of the simulation's memory, which the line below overwrites.
-            field = sim._additional_forces
-            rebx_forces = type(field)(ctypes.cast(field, ctypes.c_void_p).value)
-
-            def counted(simp):
-                counter[0] += 1
-                rebx_forces(simp)
-
-            sim.additional_forces = counted
+            _count_forces(sim, counter)
         return sim
 
     @property
@@ -877,3 +880,347 @@ class MercuryGR(Scene):
 
 
 SCENES[MercuryGR.name] = MercuryGR
+
+
+# --- the solar system from JPL's DE421 (the [ephemeris] extra) ----------------
+
+#: The bodies of :func:`solar_system`, in the order the Simulation holds them
+#: (each named by its ``name``).
+DE421_BODIES = ("Sun", "Mercury", "Venus", "Earth", "Moon", "Mars", "Jupiter", "Saturn", "Uranus", "Neptune",
+                "Pluto")
+#: The astronomical unit in km, as REBOUND's units define it (IAU 2012). DE421
+#: gives positions in km and GM in its own au (149597870.6996 km) per day^2;
+#: both are converted through km and s, so the ephemeris' au enters nowhere.
+AU_KM = 149597870.700
+#: Seconds per Julian year, the "yr" of the scenes' units.
+YEAR_S = 365.25 * 86400.0
+#: How an epoch that is a plain number is read: a Julian date in TDB, DE421's time scale.
+EPOCH_SCALE = "tdb"
+
+
+def _ephemeris_install_line(what: str) -> str:
+    return (f"{what} needs JPL's DE421 (packages de421 and jplephem), which is not installed: pip install "
+            "\"rebound_pfvi[ephemeris]\" (from a clone: pip install \".[ephemeris]\")")
+
+
+@functools.lru_cache(maxsize=None)
+def de421() -> Any:
+    """DE421 as ``jplephem.Ephemeris`` reads it from the de421 package (the
+    kernel ships in the package: no network), loaded on first use; or an
+    error naming the extra."""
+    try:
+        import de421 as kernel
+        from jplephem import Ephemeris
+    except ImportError as error:
+        raise MissingExtra(_ephemeris_install_line("the solar system from DE421")) from error
+    return Ephemeris(kernel)
+
+
+def de421_span() -> Tuple[float, float]:
+    """The first and last Julian date (TDB) DE421's kernel covers."""
+    eph = de421()
+    return float(eph.jalpha), float(eph.jomega)
+
+
+def _jd_text(jd: float) -> str:
+    from astropy.time import Time
+
+    return Time(jd, format="jd", scale=EPOCH_SCALE).iso[:10]
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def de421_epoch(epoch: Any) -> Tuple[float, float]:
+    """An epoch as a two-part Julian date (TDB): an astropy ``Time`` (any
+    scale; converted to TDB), a plain number or a string of one (a Julian
+    date in TDB), or a string astropy reads as a date in TDB ("2000-01-01
+    12:00", "2000-01-01T12:00:00"). An error names the epoch when it is none of these
+    or lies outside DE421's span."""
+    if isinstance(epoch, bool):
+        raise ValueError(f"epoch={epoch!r} is not an epoch; give an astropy Time, a Julian date (TDB) or an ISO date")
+    if hasattr(epoch, "tdb") and hasattr(epoch, "jd1"):  # an astropy Time
+        if not epoch.isscalar:
+            raise ValueError(f"epoch={epoch!r}: give one time, not an array of them")
+        tdb = epoch.tdb
+        jd1, jd2 = float(tdb.jd1), float(tdb.jd2)
+    elif isinstance(epoch, str) and _is_number(epoch):  # a Julian date as text (the command line's --epoch)
+        jd1, jd2 = _number(float(epoch), "epoch"), 0.0
+    elif isinstance(epoch, str):
+        from astropy.time import Time
+
+        try:
+            tdb = Time(epoch.strip(), scale=EPOCH_SCALE)
+        except ValueError:
+            raise ValueError(f"epoch={epoch!r} is not a date astropy can read; give an ISO date such as "
+                             "\"2000-01-01 12:00\" (TDB), a Julian date (TDB) or an astropy Time") from None
+        jd1, jd2 = float(tdb.jd1), float(tdb.jd2)
+    else:
+        jd1, jd2 = _number(epoch, "epoch"), 0.0
+    start, end = de421_span()
+    jd = jd1 + jd2
+    if not start <= jd <= end:
+        raise ValueError(f"epoch={epoch!r} (JD {jd:.2f} TDB, {_jd_text(jd)}) is outside DE421's span: JD {start:.1f} "
+                         f"to {end:.1f} TDB ({_jd_text(start)} to {_jd_text(end)})")
+    return jd1, jd2
+
+
+def de421_gm() -> Dict[str, float]:
+    """Each body's GM in AU^3/yr^2 (the scenes' units), from the constants
+    of DE421's kernel (GMS, GM1 ... GM9, GMB and EMRAT; Mars's and Pluto's
+    are those of their systems, the Earth's and the Moon's are GMB split by
+    EMRAT)."""
+    eph = de421()
+    # DE421's GM are in its au^3/day^2; through km^3/s^2 into the scenes' au^3/yr^2.
+    scale = (eph.AU / AU_KM) ** 3 * (365.25) ** 2
+    emrat = float(eph.EMRAT)
+    gmb = float(eph.GMB)
+    gm = {"Sun": eph.GMS, "Mercury": eph.GM1, "Venus": eph.GM2, "Earth": gmb * emrat / (1.0 + emrat),
+          "Moon": gmb / (1.0 + emrat), "Mars": eph.GM4, "Jupiter": eph.GM5, "Saturn": eph.GM6, "Uranus": eph.GM7,
+          "Neptune": eph.GM8, "Pluto": eph.GM9}
+    return {name: float(value) * scale for name, value in gm.items()}
+
+
+def de421_states(jd1: float, jd2: Any) -> Tuple[Any, Any]:
+    """Barycentric positions (AU) and velocities (AU/yr) of :data:`DE421_BODIES`
+    at the Julian dates (TDB) jd1 + jd2 (jd2 a number or an array): arrays
+    of shape (times, bodies, 3). DE421's Moon is geocentric and its Earth
+    the Earth-Moon barycentre; they are split by EMRAT, as JPL does."""
+    import numpy as np
+
+    eph = de421()
+    jd2 = np.atleast_1d(np.asarray(jd2, dtype=float))
+    start, end = de421_span()
+    jd = jd1 + jd2
+    if jd.min() < start or jd.max() > end:
+        bad = jd.min() if jd.min() < start else jd.max()
+        raise ValueError(f"JD {bad:.2f} TDB ({_jd_text(bad)}) is outside DE421's span: JD {start:.1f} to {end:.1f} "
+                         f"TDB ({_jd_text(start)} to {_jd_text(end)})")
+    names = {"Sun": "sun", "Mercury": "mercury", "Venus": "venus", "Mars": "mars", "Jupiter": "jupiter",
+             "Saturn": "saturn", "Uranus": "uranus", "Neptune": "neptune", "Pluto": "pluto"}
+    pos = np.empty((len(jd2), len(DE421_BODIES), 3))
+    vel = np.empty_like(pos)
+    for i, body in enumerate(DE421_BODIES):
+        if body in names:
+            p, v = eph.position_and_velocity(names[body], jd1, jd2)
+        else:
+            pb, vb = eph.position_and_velocity("earthmoon", jd1, jd2)
+            pm, vm = eph.position_and_velocity("moon", jd1, jd2)  # the Moon about the Earth
+            share = eph.earth_share if body == "Earth" else -eph.moon_share
+            p, v = pb - share * pm, vb - share * vm
+        pos[:, i, :] = p.T / AU_KM
+        vel[:, i, :] = v.T * 365.25 / AU_KM  # km/day -> AU/yr
+    return pos, vel
+
+
+def solar_system(epoch: Any = 2451545.0, gr: Optional[bool] = None) -> rebound.Simulation:
+    """The solar system from JPL's DE421 at `epoch`, as a REBOUND Simulation.
+
+    The Sun, the eight planets, the Moon and Pluto (:data:`DE421_BODIES`,
+    each with its ``name``: ``sim.particles["Moon"]``), with DE421's
+    GM values (:func:`de421_gm`) and its barycentric positions and
+    velocities, in the scenes' units (AU, yr, Msun with REBOUND's G: each
+    mass is DE421's GM over that G). ``sim.t`` is 0 at the epoch.
+
+    epoch: an astropy ``Time`` (converted to TDB), a Julian date in TDB or
+    an ISO date read as TDB (``"1900-01-01"``); J2000 by default. An epoch
+    outside DE421's span (:func:`de421_span`) is an error naming both.
+    gr: general relativity from REBOUNDx's ``gr_full`` (every body's
+    post-Newtonian field, c from DE421's constants); None: where REBOUNDx is
+    installed. True without REBOUNDx is an error naming the extra.
+
+    What the model leaves out (asteroids, the figures of the Earth and the
+    Moon, tides) limits its agreement with DE421: docs/solar-system.md.
+    Needs the ``ephemeris`` extra.
+    """
+    jd1, jd2 = de421_epoch(epoch)
+    if gr is None:
+        try:
+            import reboundx  # noqa: F401
+            gr = True
+        except ImportError:
+            gr = False
+    gm = de421_gm()
+    pos, vel = de421_states(jd1, jd2)
+    sim = new_simulation()
+    G = sim.G
+    for i, body in enumerate(DE421_BODIES):
+        (x, y, z), (vx, vy, vz) = pos[0, i], vel[0, i]
+        sim.add(m=gm[body] / G, x=x, y=y, z=z, vx=vx, vy=vy, vz=vz, name=body)
+    if gr:
+        reboundx = _reboundx("the solar system with gr=True")
+        rebx = reboundx.Extras(sim)  # kept alive by sim._extras_ref
+        force = rebx.load_force("gr_full")
+        rebx.add_force(force)
+        force.params["c"] = float(de421().CLIGHT) * 86400.0 * 365.25 / AU_KM
+        sim.force_is_velocity_dependent = 1
+    return sim
+
+
+def _count_forces(sim: rebound.Simulation, counter: List[int]) -> None:
+    """Counts the evaluations of REBOUNDx's forces on `sim` in counter[0]
+    (compare's force count, for a scene whose forces come from REBOUNDx)."""
+    import ctypes
+
+    # A copy of REBOUNDx's C function pointer: the field itself is a
+    # view of the simulation's memory, which the line below overwrites.
+    field = sim._additional_forces
+    rebx_forces = type(field)(ctypes.cast(field, ctypes.c_void_p).value)
+
+    def counted(simp):
+        counter[0] += 1
+        rebx_forces(simp)
+
+    sim.additional_forces = counted
+
+
+@dataclass
+class SolarSystem(Scene):
+    """The solar system from JPL's DE421 (:func:`solar_system`): the Sun, the
+    eight planets, the Moon and Pluto, with GR (REBOUNDx ``gr_full``) where
+    REBOUNDx is installed, from `epoch` for `years` Julian years, with an
+    output every `every` days as an ephemeris user takes them.
+
+    Every run integrates to each output (``exact_finish_time=1``) and reads
+    the positions there, inside its timed loop; each body's error is the
+    largest over the outputs, against DE421 itself and against IAS15 at a
+    tight epsilon (the reference). Fixed steps are counted per output
+    interval ("steps/period": steps per `every` days). Needs the
+    ``ephemeris`` extra.
+    """
+
+    epoch: float = 2451545.0  # Julian date, TDB
+    years: float = 10.0
+    every: float = 10.0  # days between outputs
+    gr: bool = True
+
+    name = "solar-system"
+    counts_own_forces = True
+    families = ("pfvi", "ias15", "bs", "whfast", "trace")
+    #: The sweep: {family: ((options, knob values), ...)}, in place of compare's
+    #: default one, so that the command runs in under a minute on 2 cores: pfvi
+    #: at its default epsilon (1e-6) and looser; IAS15 at its default (1e-9;
+    #: 1e-7 and pfvi's 1e-8 were measured to give the same errors, at round-off);
+    #: BS at two tolerances; WHFast with its corrector and TRACE at steps of 1
+    #: day and less (counted per output: 10 per 10-day output is a step of 1 day).
+    sweep = {
+        "pfvi": (((), (1e-4, 1e-6)),),
+        "ias15": (((), (1e-9,)),),
+        "bs": (((), (1e-7, 1e-10)),),
+        "whfast": ((WHFAST_CORRECTED, (10, 160)),),
+        "trace": (((), (10, 40)),),
+    }
+
+    def __init__(self, epoch: Any = 2451545.0, years: Any = 10.0, every: Any = 10.0, gr: Optional[bool] = None) -> None:
+        jd1, jd2 = de421_epoch(epoch)
+        self.epoch = jd1 + jd2
+        self.years = _positive(_number(years, "years"), "years")
+        self.every = _positive(units.to_scene(every, "time", "every") * 365.25 if hasattr(every, "unit")
+                               or isinstance(every, str) else _number(every, "every"), "every", every)
+        start, end = de421_span()
+        last = self.epoch + self.years * 365.25
+        if last > end:
+            raise ValueError(f"years={years!r}: the run would end at JD {last:.1f} TDB ({_jd_text(last)}), after "
+                             f"DE421's span ends (JD {end:.1f}, {_jd_text(end)})")
+        if self.every > self.years * 365.25:
+            raise ValueError(f"every={every!r} days is longer than the run ({self.years:g} yr)")
+        if gr is None:
+            try:
+                import reboundx  # noqa: F401
+                gr = True
+            except ImportError:
+                gr = False
+        elif gr:
+            _reboundx("scene 'solar-system' with gr=True")
+        self.gr = bool(gr)
+
+    def build(self, counter: Counter = None) -> rebound.Simulation:
+        sim = solar_system(self.epoch, gr=self.gr)
+        if counter is not None:
+            if self.gr:
+                _count_forces(sim, counter)
+            else:
+                def count(simp: Any) -> None:
+                    counter[0] += 1
+
+                sim.additional_forces = count
+        return sim
+
+    @property
+    def period(self) -> float:
+        """The output interval: fixed steps are counted per output."""
+        return self.every / 365.25
+
+    @property
+    def t_end(self) -> float:
+        return self.years
+
+    @property
+    def slug(self) -> str:
+        return f"solar-system-{self.years:g}yr" + ("" if self.gr else "-newtonian")
+
+    def output_times(self) -> List[float]:
+        """The times of the outputs (yr from the epoch), the last at t_end."""
+        n = int(math.floor(self.years * 365.25 / self.every + 1e-9))
+        times = [k * self.every / 365.25 for k in range(1, n + 1)]
+        if not times or times[-1] < self.t_end - 1e-12:
+            times.append(self.t_end)
+        return times
+
+    def energy(self, sim: rebound.Simulation) -> float:
+        """The energy the model conserves: with GR, REBOUNDx's Hamiltonian of gr_full."""
+        if not self.gr:
+            return sim.energy()
+        rebx = sim._extras_ref
+        return rebx.gr_full_hamiltonian(rebx.get_force("gr_full"))
+
+    def _ias15_outputs(self, epsilon: float) -> List[List[Vector]]:
+        sim = self.build()
+        sim.integrator = "ias15"
+        sim.integrator.epsilon = epsilon
+        states = []
+        for t in self.output_times():
+            sim.integrate(t, exact_finish_time=1)
+            states.append(_positions(sim))
+        return states
+
+    def reference(self) -> Dict[str, Any]:
+        """IAS15 at a tight epsilon at every output (its positions at t_end
+        the reference of compare's position error), its uncertainty (the
+        distance to IAS15 at a looser one), and DE421's positions at every output."""
+        best = self._ias15_outputs(REFERENCE_EPSILON)
+        check = self._ias15_outputs(REFERENCE_CHECK_EPSILON)
+        uncertainty = max(math.dist(a, b) for sa, sb in zip(best, check) for a, b in zip(sa, sb))
+        times = self.output_times()
+        days = [t * 365.25 for t in times]
+        de421_positions, _ = de421_states(self.epoch, days)
+        return {"positions": best[-1], "outputs": best, "de421": de421_positions.tolist(), "times": times,
+                "uncertainty": uncertainty,
+                "how": f"IAS15, epsilon {REFERENCE_EPSILON:g}, at every output (uncertainty: the largest distance "
+                       f"to the run at epsilon {REFERENCE_CHECK_EPSILON:g}); and DE421 itself"}
+
+    def output_errors(self, states: List[List[Vector]], reference: Dict[str, Any]) -> Dict[str, Dict[str, float]]:
+        """Each body's largest distance (km) over the outputs from DE421 and
+        from the IAS15 reference: {"DE421": {body: km}, "IAS15": {body: km}}."""
+        errors: Dict[str, Dict[str, float]] = {}
+        for against, key in (("DE421", "de421"), ("IAS15", "outputs")):
+            worst = [0.0] * len(DE421_BODIES)
+            for state, ref in zip(states, reference[key]):
+                for i, (p, q) in enumerate(zip(state, ref)):
+                    worst[i] = max(worst[i], math.dist(p, q))
+            errors[against] = {body: w * AU_KM for body, w in zip(DE421_BODIES, worst)}
+        return errors
+
+    def describe(self) -> str:
+        return (f"Solar system from DE421: the Sun, eight planets, the Moon and Pluto from JD {self.epoch:.1f} TDB "
+                f"({_jd_text(self.epoch)}), {self.years:g} yr with an output every {self.every:g} days (fixed "
+                f"steps counted per output), "
+                f"{'GR (REBOUNDx gr_full)' if self.gr else 'Newtonian (no GR)'}")
+
+
+SCENES[SolarSystem.name] = SolarSystem
