@@ -293,7 +293,7 @@ def test_progress_off_a_terminal_is_one_line_per_finished_run():
 
 @pytest.mark.parametrize("command, default", [("compare", "rebound-pfvi-results"),
                                               ("stability", "rebound-pfvi-stability"),
-                                              ("paper", "docs/paper")])
+                                              ("paper", "rebound-pfvi-paper")])
 def test_help_gives_the_default_output_folder(command, default, capsys):
     with pytest.raises(SystemExit):
         main([command, "--help"])
@@ -618,3 +618,18 @@ def test_ratios_near_the_tie_ratio_show_enough_digits_and_no_pfvi_clause_without
     sentence = report.conclusions(SimpleNamespace(rows=rows))[0]
     assert "takes 1.65x the wall time of BS" in sentence, sentence
     assert "pfvi" not in sentence  # no pfvi ran: nothing to say about it
+
+
+def test_paper_writes_into_its_output_folder_under_the_current_one(tmp_path, monkeypatch, capsys):
+    """Issue 41: `rebound-pfvi paper fig3` run from any folder writes to
+    rebound-pfvi-paper there (as compare and stability do), never into a
+    docs/paper below the folder it runs from; --output is taken as given."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "docs" / "paper").mkdir(parents=True)
+    assert main(["paper", "fig3", "--periods", "0.2"]) == 0
+    assert sorted(p.name for p in (tmp_path / "rebound-pfvi-paper").iterdir()) == [
+        "figure3.json", "figure3.md", "figure3.png"]
+    assert list((tmp_path / "docs" / "paper").iterdir()) == []
+    assert main(["paper", "fig3", "--periods", "0.2", "--output", str(tmp_path / "elsewhere")]) == 0
+    assert (tmp_path / "elsewhere" / "figure3.md").is_file()
+    assert "rebound-pfvi-paper/figure3.md" in capsys.readouterr().out
