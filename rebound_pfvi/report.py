@@ -288,9 +288,16 @@ def plot(results: Results, path: str) -> None:
     for ax in axes:
         ax.set_xlabel("wall time [s] (best of %d)" % results.repeats)
         ax.grid(True, which="both", alpha=0.3)
-    axes[1].legend(fontsize=7, ncol=2)
+    # The legend goes under both panels, outside them: inside either it
+    # covered curves (the loose LEAPFROG, WHFast and seed lines run through
+    # every corner of the energy panel).
+    handles, labels = axes[0].get_legend_handles_labels()
+    ncol = 3 if len(labels) > 4 else len(labels) or 1
+    rows_of_legend = -(-len(labels) // ncol)
+    fig.set_size_inches(12, 4.8 + 0.2 * rows_of_legend)
     fig.suptitle(results.scene.describe(), fontsize=9)
-    fig.tight_layout()
+    fig.legend(handles, labels, loc="lower center", ncol=ncol, fontsize=7, frameon=False)
+    fig.tight_layout(rect=(0, 0.04 * rows_of_legend, 1, 1))
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
