@@ -81,3 +81,32 @@ def test_the_ratio_to_ias15_is_the_pages_one_everywhere():
     lines = []
     demo.run_demo(orbits=1, write=lines.append)
     assert f"took {stated} of IAS15's wall time" in lines[-1]
+
+
+def test_the_epsilon_that_matches_ias15_is_the_measured_one_everywhere():
+    """The figures README.md and help(sim.integrator) give for pfvi's default
+    and for epsilon 1e-12 against IAS15's default are docs/epsilon-match.md's
+    (benchmarks/epsilon_match.py); rerun the page and they must follow."""
+    import rebound
+
+    import rebound_pfvi  # noqa: F401
+
+    page = (ROOT / "docs" / "epsilon-match.md").read_text(encoding="utf-8")
+    default = re.search(r"pfvi's default \(epsilon 1e-6\) ends (\S+) to (\S+) times IAS15's default error on "
+                        r"these (\d+) pages, at (\S+)-(\S+) times its wall time", page)
+    tight = re.search(r"pfvi at epsilon 1e-12 ends within a factor (\S+) of IAS15's default error on all (\d+) "
+                      r"pages \((\d+) at or below it\), at (\S+)-(\S+) times its wall time", page)
+    assert default and tight, "docs/epsilon-match.md lacks its summary: rerun benchmarks/epsilon_match.py"
+    sim = rebound.Simulation()
+    sim.integrator = "pfvi"
+    texts = {"README.md": (ROOT / "README.md").read_text(encoding="utf-8"),
+             "help(sim.integrator)": sim.integrator.__doc__}
+    wanted = [f"default ends {default[1]} to {default[2]} times IAS15's default error",
+              f"at {default[4]}-{default[5]} times its wall time",
+              f"within a factor {tight[1]} of IAS15's default error on all {tight[2]} pages ({tight[3]} at or "
+              f"below it), at {tight[4]}-{tight[5]} times its wall time",
+              f"{default[3]} "]
+    for name, text in texts.items():
+        flat = " ".join(text.split())
+        missing = [w for w in wanted if w not in flat]
+        assert not missing, f"{name} does not state docs/epsilon-match.md's figures: {missing}"
