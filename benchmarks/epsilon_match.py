@@ -171,7 +171,8 @@ def main(argv=None):
                   "least error on the ladder against IAS15's default error: "
                   + ", ".join(f"{r['page']} {r['best']:.1e} against {r['ias15'][0]:.1e}" for r in rows
                               if not r["match"]) + " AU), and on the pages whose reference is IAS15 at "
-                  f"epsilon {scenes.REFERENCE_EPSILON:g} an error below the reference's uncertainty (second column) is not resolved: "
+                  f"epsilon {scenes.REFERENCE_EPSILON:g} an error below the reference's uncertainty (second "
+                  "column) is not resolved: "
                   "IAS15's default error is at or below it on "
                   + ", ".join(r["page"] for r in rows if r["uncertainty"] and r["ias15"][0] <= r["uncertainty"])
                   + "."]

@@ -140,7 +140,7 @@ def tighter_less_accurate(rows: Iterable[Run]) -> List[str]:
             by_line.setdefault(r.label, []).append(r)
     out = []
     for label, runs in by_line.items():
-        tight_last = sorted(runs, key=lambda r: -r.value if r.knob != "steps/period" else r.value)
+        tight_last = sorted(runs, key=lambda r: -_number(r.value) if r.knob != "steps/period" else _number(r.value))
         pairs = [(a, b) for a, b in zip(tight_last, tight_last[1:])
                  if _number(b.position_error) > LOOSER_RATIO * _number(a.position_error)]
         if pairs:
