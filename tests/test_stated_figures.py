@@ -134,11 +134,12 @@ def test_every_run_time_readme_states_is_a_recorded_run():
     recorder = _recorder()
     records = _records()
     assert set(records) == set(recorder.COMMANDS), "rerun python3 -P benchmarks/stated_times.py"
-    readme = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    readme = " ".join(text.split())
     phrases = [p for r in records.values() for p in r["phrases"]]
     missing = [p for p in phrases if p not in readme]
     assert not missing, f"README.md does not state the recorded runs: {missing}"
-    for said, _ in stated_run_times(readme):
+    for said, _ in stated_run_times(text):
         figure = re.search(r"\d+(?:\.\d+)?\s?(?:s|min)\b", said).group(0)
         assert any(figure in p for p in phrases), f"README.md states {said!r}, which no recorded run gives"
     for name, r in records.items():
