@@ -132,11 +132,15 @@ _show_options_and_statistics()
 #: ``import rebound_pfvi`` and the recipe (help(rebound_pfvi), README.md and
 #: docs/integrator.md show it; tests/test_archive_recipe.py runs it).
 ARCHIVE_FAILURE = (
-    "REBOUND finds an integrator only once it is registered, and importing rebound_pfvi is what registers "
-    "\"pfvi\". Loaded in a process that has not imported it, an archive written with pfvi gives a "
-    "RuntimeWarning that \"The binary file seems to be corrupted\" (REBOUND skips the fields it does not "
-    "know), sim.integrator reads \"ias15\", and sim.integrate() raises \"RuntimeError: Integrator not "
-    "found.\" The fix: import rebound_pfvi before loading.")
+    'REBOUND finds an integrator only once it is registered, and importing rebound_pfvi is what registers'
+    ' "pfvi". In a process that has not imported it, an archive written with pfvi fails in REBOUND\'s '
+    'words, which do not name pfvi (REBOUND reads the file before any code of rebound_pfvi can run): '
+    'rebound.Simulationarchive(path)[-1] gives a RuntimeWarning that "The binary file seems to be '
+    'corrupted" (REBOUND skips the fields it does not know) and raises "RuntimeError: Integrator not '
+    'found." at load; rebound.Simulation(path) gives the same warning, sim.integrator reads "ias15", and '
+    'sim.integrate() raises "RuntimeError: Integrator not found." The fix: import rebound_pfvi before '
+    'loading.'
+)
 ARCHIVE_RECIPE = """\
 import rebound
 import rebound_pfvi  # registers "pfvi": import it before loading an archive written with it

@@ -217,7 +217,12 @@ def build_parser() -> argparse.ArgumentParser:
     paper.add_argument("figure", choices=("fig1", "fig2", "fig3"),
                        help="fig1: steps against energy error, phase vs none; fig2: energy and position error "
                             "over 1e5 periods at e = 0.95; fig3: the curvature frequency over 10 periods")
-    paper.add_argument("--output", default="docs/paper", help="folder for the page, data and PNG (default docs/paper)")
+    # The same default as compare's and stability's: a folder in the current
+    # one, never a docs/paper that happens to be below it (the project's own
+    # pages are rewritten with --output docs/paper from the source tree).
+    paper.add_argument("--output", default="rebound-pfvi-paper",
+                       help="folder for the page, data and PNG (default: %(default)s, in the current folder; "
+                            "the project's pages: --output docs/paper in the source tree)")
     paper.add_argument("--stages", type=int, default=None,
                        help="Gauss-Lobatto nodes, one of rebound_pfvi.STAGES (default: 2 for fig1, as in the seed; "
                             "4 for fig2 and fig3)")

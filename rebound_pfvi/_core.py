@@ -152,6 +152,57 @@ def _check_abi():
 
 
 _check_abi()
+
+#: The fix for a REBOUNDx linked to another environment's librebound (pip's
+#: wheel cache hands a reboundx built in one venv to another, its runpath
+#: still naming the first venv's rebound).
+REBOUNDX_FIX = "pip install --no-cache-dir --force-reinstall reboundx"
+
+
+def loaded_librebounds(maps: str = "/proc/self/maps") -> list:
+    """The distinct librebound files this process has loaded (Linux: from
+    /proc/self/maps; elsewhere an empty list, nothing to compare)."""
+    try:
+        with open(maps) as f:
+            lines = f.read().splitlines()
+    except OSError:
+        return []
+    found = []
+    for line in lines:
+        path = line.split(None, 5)[5] if len(line.split(None, 5)) == 6 else ""
+        name = os.path.basename(path)
+        if name.startswith("librebound") and not name.startswith("libreboundx") and ".so" in name:
+            real = os.path.realpath(path)
+            if real not in found:
+                found.append(real)
+    return found
+
+
+def two_librebounds_message(paths: list, ours: str) -> Optional[str]:
+    """The warning for more than one librebound in the process, or None."""
+    others = [p for p in paths if p != ours]
+    if not others:
+        return None
+    return (f"rebound_pfvi: this process has loaded {len(paths)} copies of REBOUND's C library: rebound's "
+            f"{ours} and {', '.join(others)} (loaded by another package, usually REBOUNDx taken from pip's wheel "
+            f"cache and built against another environment's rebound). \"pfvi\" can be registered in one copy "
+            f"only, and simulations of the other fail with \"Integrator not found.\" Fix: "
+            f"{sys.executable} -m {REBOUNDX_FIX}")
+
+
+def check_one_librebound() -> None:
+    """Raises ImportError when a second librebound is loaded: the core may
+    have bound to either copy (the dynamic linker takes the first loaded one
+    of that name), and registering then fails with REBOUND's bare
+    "Integrator not found." (measured with a REBOUNDx whose runpath names
+    another venv)."""
+    ours = os.path.realpath(getattr(rebound, "__libpath__", None) or rebound.clibrebound._name)
+    message = two_librebounds_message(loaded_librebounds(), ours)
+    if message is not None:
+        raise ImportError(message)
+
+
+check_one_librebound()
 # Once per process: REBOUND 5.2.2 hangs on a second custom registration, so the
 # C side also looks the name up in REBOUND's registry before registering.
 lib.pfvi_register()

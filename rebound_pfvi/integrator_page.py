@@ -61,6 +61,7 @@ sim.add(m=1.0)
 sim.add(m=1e-3, a=1.0, e=0.9)
 sim.move_to_com()
 sim.integrator = "pfvi"  # adaptive, s = 8, epsilon 1e-6; no sim.dt needed
+# sim.integrator.epsilon = 1e-12  # IAS15's default accuracy, to compare the two
 sim.integrate(100.0)
 print(sim.integrator.n_steps, sim.integrator.epsilon_effective)
 """

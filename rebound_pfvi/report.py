@@ -114,12 +114,54 @@ def summary_table(rows: List[Run], floor: float = 0.0, length: str = "AU") -> st
     lines = [head, "|---|" + "---|" * len(lines_in_order)]
     for target in targets:
         best = fastest(rows, target)
-        cells = [f"{_number(best[n].wall_s):.3g} s" if n in best else "-" for n in lines_in_order]
+        # The setting beside the time: what a user sets to reach the target with this integrator.
+        cells = [f"{_number(best[n].wall_s):.3g} s ({_knob(best[n])})" if n in best else "-"
+                 for n in lines_in_order]
         if best:
             winner = best[min(best, key=lambda n: _number(best[n].wall_s))]
             cells = [f"**{c}**" if n in best and tied(winner, best[n]) else c for n, c in zip(lines_in_order, cells)]
         lines.append(f"| {target:.0e} {length} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+#: A tighter setting whose position error is this many times a looser one's
+#: is named under the table (the main job's pfvi s = 8 at epsilon 1e-8 has
+#: 1.9 times its error at 1e-4).
+LOOSER_RATIO = 1.5
+
+
+def tighter_less_accurate(rows: Iterable[Run]) -> List[str]:
+    """One sentence per line where a tighter setting (smaller epsilon or eps,
+    more steps per period) ended farther from the reference than the looser
+    one before it, with the steps of both."""
+    by_line: Dict[str, List[Run]] = {}
+    for r in rows:
+        if r.status == "ok" and r.value is not None and math.isfinite(_number(r.position_error)):
+            by_line.setdefault(r.label, []).append(r)
+    out = []
+    for label, runs in by_line.items():
+        tight_last = sorted(runs, key=lambda r: -_number(r.value) if r.knob != "steps/period" else _number(r.value))
+        pairs = [(a, b) for a, b in zip(tight_last, tight_last[1:])
+                 if _number(b.position_error) > LOOSER_RATIO * _number(a.position_error)]
+        if pairs:
+            out.append(f"{label}: " + "; ".join(
+                f"{_knob(b)} ends {_number(b.position_error):.2g} from the reference against "
+                f"{_number(a.position_error):.2g} at {_knob(a)} ({b.steps} steps against {a.steps})"
+                for a, b in pairs) + ".")
+    return out
+
+
+#: Why a pfvi line's error is not monotone in epsilon (measured on the main
+#: job's comet: benchmarks/epsilon_match.py writes the run behind it).
+PFVI_NOT_MONOTONE = (
+    "Why for pfvi: at s = 8 every epsilon above 1.2e-7 runs at 1.2e-7 (epsilon_effective: the steps are held at "
+    "their cap), and down to about 1e-8 the step track hardly changes (on the comet 101 to 106 steps), so the "
+    "error does not follow epsilon. It is the sum of the steps' signed errors, almost all of it along the "
+    "track (the comet's phase), and its sign changes from one epsilon to the next: on the comet -2.5e-7 AU at "
+    "1e-6, +1.3e-7 at 3.2e-8, -4.7e-7 at 1e-8, +6.1e-8 at 3.2e-9, +7.9e-11 at 3.2e-10 and -4.1e-9 at 1e-10 "
+    "(docs/epsilon-match.md). The error falls with epsilon as the order says (14 at s = 8) only between "
+    "settings far enough apart, about a factor 100 in epsilon; a single setting can land about 50 times off "
+    "that trend either way.")
 
 
 #: How each family gets to its accuracy: the reason behind its cost per unit of accuracy.
@@ -309,9 +351,16 @@ def plot(results: Results, path: str) -> None:
     for ax in axes:
         ax.set_xlabel("wall time [s] (best of %d)" % results.repeats)
         ax.grid(True, which="both", alpha=0.3)
-    axes[1].legend(fontsize=7, ncol=2)
+    # The legend goes under both panels, outside them: inside either it
+    # covered curves (the loose LEAPFROG, WHFast and seed lines run through
+    # every corner of the energy panel).
+    handles, labels = axes[0].get_legend_handles_labels()
+    ncol = 3 if len(labels) > 4 else len(labels) or 1
+    rows_of_legend = -(-len(labels) // ncol)
+    fig.set_size_inches(12, 4.8 + 0.2 * rows_of_legend)
     fig.suptitle(results.scene.describe(), fontsize=9)
-    fig.tight_layout()
+    fig.legend(handles, labels, loc="lower center", ncol=ncol, fontsize=7, frameon=False)
+    fig.tight_layout(rect=(0, 0.04 * rows_of_legend, 1, 1))
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
@@ -321,6 +370,17 @@ def machine() -> Dict[str, Any]:
 
     return {"python": platform.python_version(), "rebound": rebound.__version__, "machine": platform.machine(),
             "cores": os.cpu_count()}
+
+
+def _tighter_section(rows: List[Run]) -> str:
+    notes = tighter_less_accurate(rows)
+    if not notes:
+        return ""
+    text = "\nWhere a tighter setting ended less accurate than the looser one before it:\n\n"
+    text += "\n".join(f"- {note}" for note in notes) + "\n"
+    if any(note.startswith("pfvi") for note in notes):
+        text += "\n" + PFVI_NOT_MONOTONE + "\n"
+    return text
 
 
 def write(results: Results, output: str, basename: Optional[str] = None,
@@ -379,10 +439,10 @@ particle from its reference position at t_end (Kepler: of the relative position)
 
 {conclusions_section(results, floor, length)}
 
-## Fastest run of each integrator that reaches a position error
+## Fastest run of each integrator that reaches a position error, and its setting
 
 {summary_table(results.rows, floor, length)}
-
+{_tighter_section(results.rows)}
 ![work-precision diagram]({os.path.basename(base)}.png)
 {png_note}{bodies_text}
 ## Every run

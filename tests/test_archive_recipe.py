@@ -58,6 +58,23 @@ def test_without_the_import_rebound_fails_as_documented(tmp_path):
     assert done.returncode == 0, done.stderr
     assert done.stdout.splitlines() == ["['The binary file seems to be corrupted']", "ias15",
                                         "RuntimeError: Integrator not found."]
+    # Simulationarchive(path)[-1], the other way users load: it raises at load.
+    done = run(textwrap.dedent("""
+        import warnings
+        import rebound
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                rebound.Simulationarchive("pfvi-archive.bin")[-1]
+            except RuntimeError as error:
+                print("RuntimeError:", error)
+        print([str(w.message).split(".")[0] for w in caught])
+    """), tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines() == ["RuntimeError: Integrator not found.",
+                                        "['The binary file seems to be corrupted']"]
     for said in ('"The binary file seems to be corrupted"', 'sim.integrator reads "ias15"',
+                 'rebound.Simulationarchive(path)[-1] gives a RuntimeWarning',
+                 'raises "RuntimeError: Integrator not found." at load',
                  '"RuntimeError: Integrator not found."', "import rebound_pfvi before loading"):
         assert said in ARCHIVE_FAILURE, said

@@ -293,7 +293,7 @@ def test_progress_off_a_terminal_is_one_line_per_finished_run():
 
 @pytest.mark.parametrize("command, default", [("compare", "rebound-pfvi-results"),
                                               ("stability", "rebound-pfvi-stability"),
-                                              ("paper", "docs/paper")])
+                                              ("paper", "rebound-pfvi-paper")])
 def test_help_gives_the_default_output_folder(command, default, capsys):
     with pytest.raises(SystemExit):
         main([command, "--help"])
@@ -510,6 +510,8 @@ def test_pages_call_differences_within_the_noise_ties_and_say_what_each_ratio_is
     table = report.summary_table(rows)
     first = next(line for line in table.splitlines() if line.startswith("| 1e-02"))
     assert first.count("**") == 4, first  # pfvi and BS in bold, IAS15 not
+    # Each cell names the setting that reached the target (issue 41).
+    assert "0.01 s (epsilon 1e-06)" in first and "0.05 s (epsilon 1e-05)" in first, first
     # Outside the noise there is one fastest, and the ratio says of what to what.
     rows[1] = _timed("bs", "BS", "eps", 1e-7, 0.010 * report.TIE_RATIO * 1.5, 1e-3)
     sentence = report.conclusions(SimpleNamespace(rows=rows))[0]
@@ -618,3 +620,35 @@ def test_ratios_near_the_tie_ratio_show_enough_digits_and_no_pfvi_clause_without
     sentence = report.conclusions(SimpleNamespace(rows=rows))[0]
     assert "takes 1.65x the wall time of BS" in sentence, sentence
     assert "pfvi" not in sentence  # no pfvi ran: nothing to say about it
+
+
+def test_paper_writes_into_its_output_folder_under_the_current_one(tmp_path, monkeypatch, capsys):
+    """Issue 41: `rebound-pfvi paper fig3` run from any folder writes to
+    rebound-pfvi-paper there (as compare and stability do), never into a
+    docs/paper below the folder it runs from; --output is taken as given."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "docs" / "paper").mkdir(parents=True)
+    assert main(["paper", "fig3", "--periods", "0.2"]) == 0
+    assert sorted(p.name for p in (tmp_path / "rebound-pfvi-paper").iterdir()) == [
+        "figure3.json", "figure3.md", "figure3.png"]
+    assert list((tmp_path / "docs" / "paper").iterdir()) == []
+    assert main(["paper", "fig3", "--periods", "0.2", "--output", str(tmp_path / "elsewhere")]) == 0
+    assert (tmp_path / "elsewhere" / "figure3.md").is_file()
+    assert "rebound-pfvi-paper/figure3.md" in capsys.readouterr().out
+
+
+def test_a_tighter_setting_that_ends_less_accurate_is_named_with_why():
+    """Issue 41: the main job's pfvi s = 8 had a larger error at epsilon 1e-8
+    than at 1e-4 with no word of why."""
+    rows = [_timed("pfvi", "pfvi s=8", "epsilon", 1e-4, 0.010, 2.5e-7),
+            _timed("pfvi", "pfvi s=8", "epsilon", 1e-8, 0.011, 4.7e-7),
+            _timed("pfvi", "pfvi s=8", "epsilon", 1e-10, 0.012, 4e-9),
+            _timed("whfast", "WHFast", "steps/period", 100, 0.001, 1e-1),
+            _timed("whfast", "WHFast", "steps/period", 1000, 0.002, 1e-3)]
+    rows[0].steps, rows[1].steps = 102, 106
+    notes = report.tighter_less_accurate(rows)
+    assert notes == ["pfvi s=8: epsilon 1e-08 ends 4.7e-07 from the reference against 2.5e-07 at epsilon 1e-04 "
+                     "(106 steps against 102)."], notes
+    section = report._tighter_section(rows)
+    assert "epsilon_effective" in section and "along the track" in section
+    assert report._tighter_section(rows[2:]) == ""

@@ -9,7 +9,11 @@ from rebound_pfvi.demo import run_demo
 def test_demo_rows_and_errors():
     lines = []
     rows = run_demo(orbits=2, write=lines.append)
-    assert len(rows) == 8 and len(lines) == 12
+    notes = [line for line in lines if line.startswith("Note (")]
+    assert len(rows) == 8 and len(lines) == 12 + len(notes)
+    # pfvi's warnings come as notes under the table, never as Python's
+    # RuntimeWarning with a site-packages path in its middle (issue 41).
+    assert all(line.startswith("Note (") for line in lines[-1 - len(notes):-1])
     by = {(r["e"], r["integrator"]): r for r in rows}
     # The defaults first, named as such.
     assert rows[0]["integrator"] == "pfvi (defaults)" and "pfvi (defaults)" in lines[3]
@@ -32,3 +36,17 @@ def test_cli_rejects_bad_orbits(capsys):
         main(["demo", "--orbits", "0"])
     err = capsys.readouterr().err
     assert "argument --orbits: 0 must be at least 1" in err, err
+
+
+def test_bare_command_prints_no_python_warning(tmp_path):
+    """Issue 41: `rebound-pfvi` with no arguments printed pfvi's RuntimeWarning
+    about the seed's fixed step at e = 0.95, with a site-packages path, in the
+    middle of its table; the demo states it as a note under the table."""
+    import subprocess
+    import sys
+
+    run = subprocess.run([sys.executable, "-P", "-W", "default", "-m", "rebound_pfvi", "demo", "--orbits", "100"],
+                         capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert "Warning" not in run.stderr and "site-packages" not in run.stdout + run.stderr, run.stderr
+    assert "Note (pfvi seed s=2 phase, fixed dt, e = 0.95): pfvi: the fixed step" in run.stdout

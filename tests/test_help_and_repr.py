@@ -119,3 +119,16 @@ def test_a_compare_setting_runs_pfvi_at_the_cores_defaults_but_what_it_names():
         if dict(options).get("fitting") == "phase":
             expected.update(frequency="curvature", centre="origin")  # the seed's scheme
         assert {name: getattr(sim.integrator, name) for name in expected} == expected
+
+
+def test_help_opens_with_a_short_summary_naming_the_epsilon_that_matches_ias15():
+    """Issue 41: help(sim.integrator) ran to 346 lines with no summary first;
+    it opens with at most 15 lines (REBOUND's title, a blank, the summary)
+    that say what the default epsilon buys and which epsilon matches IAS15."""
+    lines = pfvi().integrator.__doc__.splitlines()
+    end = lines.index("", 2)  # the blank line after the summary
+    assert end <= 15, lines[:end]
+    summary = " ".join(lines[2:end])
+    assert summary.startswith("In short:")
+    assert "sim.integrator.epsilon = 1e-12" in summary and "IAS15's default error" in summary
+    assert "default 1e-6" in summary
