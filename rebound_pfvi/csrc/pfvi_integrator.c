@@ -643,6 +643,13 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_option
         pfvi_error(r, "pfvi: sim.t = %g is not finite.", r->t);
         return 0;
     }
+    if (r->N_active != SIZE_MAX && r->N_active > r->N){
+        // REBOUND's gravity loops i < N_active over the particles: past N it
+        // reads and writes beyond them.
+        pfvi_error(r, "pfvi: sim.N_active = %zu is larger than sim.N = %zu; it must be at most N (or -1: all "
+                "active). Step not taken.", r->N_active, r->N);
+        return 0;
+    }
     if (!(r->exit_min_distance >= 0.) || isinf(r->exit_min_distance)){
         // REBOUND squares it, so a negative one would stop its own check but
         // not pfvi's search inside the step (which reads > 0 as on).
