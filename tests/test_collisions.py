@@ -15,7 +15,7 @@ import rebound_pfvi  # noqa: F401
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import collisions as bench  # noqa: E402
-from conftest import needs_python_collision_resolve  # noqa: E402
+from conftest import needs_python_collision_resolve, needs_python_heartbeat  # noqa: E402
 
 R = bench.R_SUM
 
@@ -404,6 +404,7 @@ def _line_pairs(seeds):
     return disagree
 
 
+@needs_python_heartbeat   # (the closest approach is tracked in a heartbeat)
 def test_line_collisions_follow_pfvis_path_against_ias15_closest_approach():
     # Seeds 0 ... 47: 8 pairs touch (IAS15); before, seeds 29 and 44 merged
     # with "line" and "linetree" without touching.
@@ -411,6 +412,7 @@ def test_line_collisions_follow_pfvis_path_against_ias15_closest_approach():
 
 
 @pytest.mark.slow
+@needs_python_heartbeat
 def test_line_collisions_follow_pfvis_path_over_120_planet_pairs():
     # 20 of 120 touch; before, 2 more merged (at 1.14 and 4.07 times the radii).
     assert _line_pairs(range(120)) == []
