@@ -275,6 +275,11 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // orbits). Spreading the correction over many intervals made the energy
 // error grow faster (it is asymmetric every interval it acts), and a
 // time-symmetric spring on the mismatch was unstable (docs/roundoff.md).
+// A t_compensation beyond this fraction of max(1, |t|) is not t's rounding
+// (folded every step, it stays below half of t's last place; archives
+// written before the fold carried up to 1e-9 |t| after 1e7 held steps):
+// set by hand or an edited archive, it is dropped.
+#define PFVI_T_LO_MAX 1e-9
 #define PFVI_TRACK_MISMATCH_WEIGHT (1./32.)
 #define PFVI_TRACK_MISMATCH_MAX 0.1
 // The steady track (pfvi_control.c, docs/roundoff.md): with three or more
@@ -880,7 +885,9 @@ struct pfvi_state {
     size_t replay_first, replay_n;
     // What the symmetric track's time lost to rounding: the state is at
     // r->t + t_compensation (0 if r->t is not t_compensated, the t it was
-    // kept for), so that a step capped to finish on time lands there.
+    // kept for), so that a step capped to finish on time, or an output
+    // step, lands there. Folded into r->t every step (below half its last
+    // place); PFVI_T_LO_MAX bounds what an archive or attribute may set.
     double t_compensation;
     double t_compensated;
     // The density at the end of the last step (and its partners), the next
@@ -1115,6 +1122,10 @@ PFVI_INTERNAL void pfvi_ghost_boxes(struct reb_simulation* r, struct reb_vec6d* 
 // carried part above the doubles' precision): the predictor, the symmetric
 // track and the carried parts start afresh, as after an edit.
 PFVI_INTERNAL void pfvi_discard_implausible(const struct reb_simulation* r, struct pfvi_state* st);
+// What r->t lacks of the state's time: st->t_compensation if it was kept for
+// this t and is plausible (pfvi_t_lo_plausible), else 0.
+PFVI_INTERNAL double pfvi_t_lo(const struct reb_simulation* r, const struct pfvi_state* st);
+PFVI_INTERNAL int pfvi_t_lo_plausible(double t_lo, double t);
 // The force model as the step starts (kept in step_model), and, after the
 // step, what a callback set during it, applied.
 PFVI_INTERNAL void pfvi_step_model_keep(const struct reb_simulation* r, struct pfvi_state* st);

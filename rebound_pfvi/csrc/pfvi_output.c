@@ -212,7 +212,10 @@ enum pfvi_trial pfvi_output_present(struct reb_simulation* r, struct pfvi_state*
         }
     }
     const uint64_t attempts = st->statistics.n_attempts;
-    const enum pfvi_trial trial = as_is ? PFVI_TRIAL_OK : pfvi_trial_step(r, st, N, t_real, t_out - t_real);
+    // The state is at t_real + t_lo (pfvi_control.c keeps t's rounding):
+    // the output step goes what is left to t_out.
+    const double t_lo = pfvi_t_lo(r, st);
+    const enum pfvi_trial trial = as_is ? PFVI_TRIAL_OK : pfvi_trial_step(r, st, N, t_real, (t_out - t_real) - t_lo);
     st->statistics.n_attempts = attempts;  // an output is not a step of the run
     st->retry_valid = 0;  // its stages seed no step of the run
     if (trial != PFVI_TRIAL_OK){

@@ -462,6 +462,14 @@ int pfvi_field_of(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_f
     return 1;
 }
 
+int pfvi_t_lo_plausible(double t_lo, double t){
+    return fabs(t_lo) <= PFVI_T_LO_MAX*fmax(1., fabs(t));
+}
+
+double pfvi_t_lo(const struct reb_simulation* r, const struct pfvi_state* st){
+    return (r->t == st->t_compensated && pfvi_t_lo_plausible(st->t_compensation, r->t)) ? st->t_compensation : 0.;
+}
+
 void pfvi_discard_implausible(const struct reb_simulation* r, struct pfvi_state* st){
     // The predictor: a step of its own, at a finite time, with finite stages.
     int predictor = st->predictor_stages != 0;
@@ -516,7 +524,7 @@ void pfvi_discard_implausible(const struct reb_simulation* r, struct pfvi_state*
     if (!(st->track_seen_lo <= st->track_seen_hi)){
         st->track_seen_lo = st->track_seen_hi = r->t;  // NaN or crossed: everything ahead is unseen
     }
-    if (!(fabs(st->t_compensation) <= 1e-9*fmax(1., fabs(r->t)))){
+    if (!pfvi_t_lo_plausible(st->t_compensation, r->t)){
         st->t_compensation = 0.;
     }
     // The carried low-order parts of x and v: below the coordinates' own precision.
