@@ -826,14 +826,19 @@ struct pfvi_steady {
 // lambda falling back, the track's drift correction), logged so that a
 // reversal replays it (issue 40, item 7): the step's ends, its direction,
 // and the track as the step found it.
+// The track's state a replayed step restores: fields of struct pfvi_state,
+// one list for the log's declaration, its keeping and its restoring.
+#define PFVI_TRACK_FIELDS(X) \
+    X(double, rho) X(double, rho_sign) X(double, dt_proposed) X(double, track_done) X(int, track_at_end) \
+    X(double, track_kappa) X(double, density_scale) X(double, dt_last_full) X(double, track_mismatch) \
+    X(double, track_seen_lo) X(double, track_seen_hi) X(struct pfvi_steady, steady) \
+    X(double, t_compensation) X(double, t_compensated)
+#define PFVI_FIELD_DECLARE(type, name) type name;
 struct pfvi_replay {
     double t_start, t_end, sign;
-    double rho, rho_sign, dt_proposed, track_done;
-    int track_at_end;
-    double track_kappa, density_scale, dt_last_full, track_mismatch, track_seen_lo, track_seen_hi;
-    struct pfvi_steady steady;
-    double t_compensation, t_compensated;
+    PFVI_TRACK_FIELDS(PFVI_FIELD_DECLARE)
 };
+#undef PFVI_FIELD_DECLARE
 // The last this many are kept (a ring; older ones are not replayed).
 #define PFVI_REPLAY_MAX 256
 // A reversal meets a logged step where its t is within this fraction of the

@@ -485,19 +485,15 @@ static int steady_update(struct pfvi_state* st, size_t N, double G, double t, do
 
 // The track as a step finds it, for the replay log (struct pfvi_replay).
 static void replay_keep(const struct pfvi_state* st, struct pfvi_replay* e){
-    e->rho = st->rho; e->rho_sign = st->rho_sign; e->dt_proposed = st->dt_proposed; e->track_done = st->track_done;
-    e->track_at_end = st->track_at_end; e->track_kappa = st->track_kappa; e->density_scale = st->density_scale;
-    e->dt_last_full = st->dt_last_full; e->track_mismatch = st->track_mismatch;
-    e->track_seen_lo = st->track_seen_lo; e->track_seen_hi = st->track_seen_hi; e->steady = st->steady;
-    e->t_compensation = st->t_compensation; e->t_compensated = st->t_compensated;
+#define PFVI_FIELD_KEEP(type, name) e->name = st->name;
+    PFVI_TRACK_FIELDS(PFVI_FIELD_KEEP)
+#undef PFVI_FIELD_KEEP
 }
 
 static void replay_restore(struct pfvi_state* st, const struct pfvi_replay* e){
-    st->rho = e->rho; st->rho_sign = e->rho_sign; st->dt_proposed = e->dt_proposed; st->track_done = e->track_done;
-    st->track_at_end = e->track_at_end; st->track_kappa = e->track_kappa; st->density_scale = e->density_scale;
-    st->dt_last_full = e->dt_last_full; st->track_mismatch = e->track_mismatch;
-    st->track_seen_lo = e->track_seen_lo; st->track_seen_hi = e->track_seen_hi; st->steady = e->steady;
-    st->t_compensation = e->t_compensation; st->t_compensated = e->t_compensated;
+#define PFVI_FIELD_RESTORE(type, name) st->name = e->name;
+    PFVI_TRACK_FIELDS(PFVI_FIELD_RESTORE)
+#undef PFVI_FIELD_RESTORE
 }
 
 static void replay_push(struct pfvi_state* st, const struct pfvi_replay* e){
