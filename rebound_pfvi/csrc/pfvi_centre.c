@@ -45,10 +45,19 @@ void pfvi_centres(const struct reb_particle* p, const struct pfvi_end_state* sta
     double M = 0., X[3] = {0., 0., 0.}, V[3] = {0., 0., 0.};
     if (centre == PFVI_CENTRE_BARYCENTRE && G > 0.){
         for (size_t j=0; j<n_attracting; j++){
-            const double m = p[j].m;
-            M += m;
+            M += p[j].m;
+        }
+        // Tiny masses: from mass fractions, as the pairs' barycentres
+        // (m x underflows below PFVI_MASS_TINY; the products otherwise, so
+        // that every trajectory stays as it was).
+        const int tiny = !(M > PFVI_MASS_TINY);
+        for (size_t j=0; j<n_attracting; j++){
+            const double m = tiny ? p[j].m/M : p[j].m;
             X[0] += m*p[j].x; X[1] += m*p[j].y; X[2] += m*p[j].z;
             V[0] += m*p[j].vx; V[1] += m*p[j].vy; V[2] += m*p[j].vz;
+        }
+        if (tiny){
+            M = (M > 0.) ? 1. : M;   // X and V are already the barycentre's
         }
     }
     const int barycentre = (centre == PFVI_CENTRE_BARYCENTRE && M > 0. && isfinite(M));
