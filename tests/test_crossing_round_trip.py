@@ -2,22 +2,13 @@
 benchmarks/crossing_round_trip.py, docs/step-control.md): the way back
 replays the way out's asymmetric steps."""
 import math
+import sys
+from pathlib import Path
 
 import pytest
-import rebound
 
-import rebound_pfvi  # noqa: F401  (registers "pfvi")
-
-
-def comet(a, f):
-    sim = rebound.Simulation()
-    sim.units = ("AU", "yr", "Msun")
-    sim.add(m=1.0)
-    sim.add(m=9.547919e-4, a=5.2026, e=0.0485, inc=0.0228)
-    sim.add(m=2.858e-4, a=9.5549, e=0.0555, inc=0.0434, f=2.0)
-    sim.add(m=0.0, a=a, e=0.8, f=f, inc=0.1, Omega=1.0)
-    sim.move_to_com()
-    return sim
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from crossing_round_trip import build as comet  # noqa: E402  (the grid's systems)
 
 
 def round_trip(a, f, eps):

@@ -2,39 +2,17 @@
 item 6): a reduced grid of benchmarks/retrograde_sweep.py (the dense sweep and its
 table: docs/step-control.md)."""
 import math
+import sys
+from pathlib import Path
 
 import pytest
-import rebound
 
-import rebound_pfvi  # noqa: F401  (registers "pfvi")
-
-T = 300.0
-
-
-def _build(inc, m, a, e, f):
-    sim = rebound.Simulation()
-    sim.units = ("AU", "yr", "Msun")
-    sim.add(m=1.0)
-    sim.add(m=9.55e-4, a=5.203, e=0.048, f=1.0, inc=0.02)
-    sim.add(m=m, a=a, e=e, f=f, inc=inc, Omega=0.5, omega=0.5)
-    sim.move_to_com()
-    return sim
-
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+import retrograde_sweep  # noqa: E402  (the sweep's systems, reference and measure)
 
 def _goal(system, s, eps):
-    """The largest position error at T in units of epsilon_effective a n."""
-    inc, m, a, e, f = system
-    ref = _build(*system)
-    ref.integrator = "ias15"
-    ref.integrator.epsilon = 1e-11
-    ref.integrate(T)
-    sim = _build(*system)
-    sim.integrator = "pfvi"
-    sim.integrator.stages = s
-    sim.integrator.epsilon = eps
-    sim.integrate(T)
-    error = max(math.dist(p.xyz, q.xyz) for p, q in zip(sim.particles[1:], ref.particles[1:]))
-    return error / (sim.integrator.epsilon_effective * a * T / math.sqrt(a**3))
+    """The largest position error at the sweep's T in units of epsilon_effective a n t."""
+    return retrograde_sweep.run((system, s, eps, retrograde_sweep.reference(system)))[3]
 
 
 # (system (inclination, mass, a, e, f), s, epsilon). The build before the fix
