@@ -3,7 +3,11 @@ files: for each page and position error (1e-6, 1e-8, 1e-10 AU), pfvi at its
 defaults (the line "pfvi s=8") and IAS15, each its least wall time to that
 error within the sweep, their ratio, and the fastest line of all with every
 line tied with it (within report.TIE_RATIO, the run-to-run noise).
-Then, per family, the pages and errors where it is the fastest or tied.
+Then, per family, the pages and errors where it is the fastest or tied;
+and issue 42's two comparisons: per page and error, pfvi's fastest line
+against the fastest line of any other integrator (BS included; the issue
+counts within 1.2x as tied, the pages' noise is report.TIE_RATIO), and at
+1e-6 AU pfvi's defaults against WHFast with its corrector.
 
     python3 -P benchmarks/pages_summary.py [docs/results]
 """
@@ -19,6 +23,7 @@ from rebound_pfvi.runs import Run
 
 TARGETS = (1e-6, 1e-8, 1e-10)
 DEFAULT_LINE = "pfvi s=8"
+WHFAST_CORRECTOR = "WHFast corrector=11 safe_mode=0"
 #: Page order and names, as docs/results.md lists them.
 PAGES = {"kepler-e0.5": "Kepler e = 0.5", "kepler-e0.9": "Kepler e = 0.9", "kepler-e0.95": "Kepler e = 0.95",
          "kepler-e0.99": "Kepler e = 0.99", "comet-e0.95": "comet", "triple-e0.7": "triple",
@@ -97,6 +102,34 @@ def main() -> None:
     print("\nFastest or tied, per family:")
     for family, where in sorted(wins.items()):
         print(f"- {family}: {len(where)}: {', '.join(where)}")
+    print("\n" + "\n".join(against_the_rest(folder)))
+
+
+def against_the_rest(folder: Path) -> List[str]:
+    """Issue 42's table: pfvi's fastest line over the fastest other line,
+    and (1e-6 AU) pfvi's defaults over WHFast with its corrector."""
+    lines = ["| page | error | fastest pfvi line | fastest other line | ratio | pfvi defaults / WHFast corrector |",
+             "|---|---|---|---|---|---|"]
+    for slug, name in PAGES.items():
+        path = folder / f"{slug}.json"
+        if not path.exists():
+            continue
+        rows = [Run.from_dict(r) for r in json.loads(path.read_text())["rows"]]
+        for target in TARGETS:
+            best = report.fastest(rows, target)
+            pfvi = min((r for r in best.values() if r.family == "pfvi"), key=lambda r: r.wall_s, default=None)
+            other = min((r for r in best.values() if r.family != "pfvi"), key=lambda r: r.wall_s, default=None)
+            ratio = f"{pfvi.wall_s / other.wall_s:.2f}" if pfvi and other else "-"
+            whfast = best.get(WHFAST_CORRECTOR)
+            default = best.get(DEFAULT_LINE)
+            corrector = "-"
+            if target == TARGETS[0]:
+                corrector = (f"{default.wall_s / whfast.wall_s:.2f}" if default and whfast
+                             else "WHFast corrector does not get there" if default else "pfvi s=8 does not get there")
+            lines.append(f"| {name} | {target:.0e} AU | "
+                         f"{f'{pfvi.label} {_s(pfvi.wall_s)}' if pfvi else 'none gets there'} | "
+                         f"{f'{other.label} {_s(other.wall_s)}' if other else 'none gets there'} | {ratio} | {corrector} |")
+    return lines
 
 
 if __name__ == "__main__":
