@@ -148,7 +148,20 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // drift correction fires on Kepler orbits (measured, 200 orbits at s = 8:
 // one asymmetric step at e >= 0.5 and kappa 1.16, 796 of 1394 steps at
 // e = 0.7 and kappa 1.6), breaking the steps' time symmetry: the cap stays
-// at 1 until the track holds there.
+// at 1 until the track holds there. Why it fires (issue 42, item 3,
+// measured): no drift. The mismatch average of a Kepler track settles at an
+// offset of its own, set by kappa, e and the phase the track started at
+// (e = 0.7: -0.09 at kappa 1 from any phase but pericentre, +0.016 from
+// pericentre; -0.13 at kappa 1.16, -0.21 at 1.4), and stays within 0.015 of
+// it over 200 orbits; the correction measures it from 0 (at kappa 1 it
+// already fires at e = 0.78 from a quarter of the orbit: 2 of 408 runs).
+// Measured from the settled value instead (branches i42-kappa-base and
+// i42-kappa-cap125), Kepler e = 0 ... 0.99 takes no asymmetric step up to
+// kappa 1.37 at s = 4 ... 8; but at kappa > 1 reversals of multi-body runs
+// fail with either correction (the compact five-planet system, 3000 steps
+// and back: 0.4 AU off at kappa 1.05, 2.7e-3 AU at 1.163, no asymmetric
+// step; a comet crossing Jupiter's orbit: new asymmetric steps on the way
+// back), so the cap stays.
 #define PFVI_DENSITY_NORM 8
 // e^2 beyond which the eccentricity factor (1 - e^2)^(-gamma) is held
 // (e = 0.999; unbound and radial pairs get it too): beyond it epsilon's
