@@ -1143,9 +1143,10 @@ PFVI_INTERNAL int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi
 // pfvi_gravity.c: whether REBOUND's routine would compute only its basic
 // gravity (no additional forces, variations, ghost boxes or ignored terms),
 // which pfvi_gravity_stages then computes at stages k0 .. k1 of positions x
-// into a in one pass, bit for bit as REBOUND would stage by stage.
+// into a in one pass, bit for bit as REBOUND would stage by stage; 0 if a
+// force is not finite (a is written all the same).
 PFVI_INTERNAL int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st, size_t N);
-PFVI_INTERNAL void pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
+PFVI_INTERNAL int pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
         const double (*x)[PFVI_STAGES_MAX][3], double (*a)[PFVI_STAGES_MAX][3], int k0, int k1);
 PFVI_INTERNAL void pfvi_track_added(struct pfvi_state* st);
 PFVI_INTERNAL void pfvi_track_removed(struct pfvi_state* st, size_t index);
