@@ -987,6 +987,18 @@ struct pfvi_state {
     size_t predictor_N;
     double predictor_h;
     double predictor_t;            // t at its end
+    // The two-body predictor's rest weights (pfvi_solve.c: the last step's
+    // Lagrange basis at this step's nodes, and their integral), which depend
+    // only on s and the step ratio h/predictor_h: kept for the last ratio,
+    // made again only when it or s changes (the steady track's steps are
+    // equal). Not saved (0: none kept).
+    int predict_weights_s;
+    double predict_weights_rho;
+    struct pfvi_rest_weights {
+        int extrapolated;
+        double start[PFVI_STAGES_MAX];
+        double last_t[PFVI_STAGES_MAX][PFVI_STAGES_MAX];   // last[k][m] as last_t[m][k]: the stages k as lanes
+    } predict_weights;
     size_t cache_N;                // >0: `end` describes the particles, taken at cache_t under cache_model
     size_t end_N;                  // >0: `end` holds the particles as the last step left them (edits are
                                    // found against it; REBOUND's synchronize clears cache_N, not this)

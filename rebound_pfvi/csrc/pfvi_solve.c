@@ -999,17 +999,13 @@ static void kepler_pull(const double r[3], double mu, double softening2, double 
 // rest follows: out[k] = h^2 sum_j nu[k][j] w_j rest_j. Extrapolation and
 // integral are one matrix for all bodies of a step (rest_weights):
 //     out[k] = h^2 (start[k] rest_0 + sum_m last[k][m] rest_old_m).
-struct rest_weights {
-    int extrapolated;
-    double start[PFVI_STAGES_MAX];
-    double last_t[PFVI_STAGES_MAX][PFVI_STAGES_MAX];   // last[k][m] as last_t[m][k]: the stages k as lanes
-};
+// (struct pfvi_rest_weights, pfvi.h: kept in the state for the last step ratio)
 
 // The lanes k of last_t and start hold each sum in the scalar loop's order
 // (j, then m, ascending), so the vector loops give the scalar loops' bits.
 PFVI_VECTOR_CLONES
 static void rest_weights_of(const struct pfvi_lobatto* rule, const double (*basis)[PFVI_STAGES_MAX],
-        struct rest_weights* rw){
+        struct pfvi_rest_weights* rw){
     const int s = rule->s;
     rw->extrapolated = (basis != NULL);
     memset(rw->start, 0, sizeof(rw->start));
@@ -1045,7 +1041,7 @@ static void rest_weights_of(const struct pfvi_lobatto* rule, const double (*basi
 }
 
 PFVI_VECTOR_CLONES
-static void rest_integral(const struct pfvi_state* st, const struct rest_weights* rw, double h,
+static void rest_integral(const struct pfvi_state* st, const struct pfvi_rest_weights* rw, double h,
         const double rest0[3], const double (*rest_old)[3], double (*out)[3]){
     const int s = st->rule.s;
     const double h2 = h*h;
@@ -1077,7 +1073,7 @@ static void rest_integral(const struct pfvi_state* st, const struct rest_weights
 // acceleration; a mutual pair's relative orbit about their barycentre; the
 // start's motion under its extrapolated acceleration without a partner.
 static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, size_t i, double h,
-        const struct rest_weights* rw){
+        const struct pfvi_rest_weights* rw){
     const int s = st->rule.s;
     const struct pfvi_newton* const u = &st->newton[i];
     if (u->kind == PFVI_NEWTON_MEMBER){
@@ -1200,17 +1196,28 @@ static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, 
 }
 
 void pfvi_solve_predict(struct pfvi_state* st, size_t N, const struct pfvi_field* field, double h, int extrapolate){
-    // The last step's stages, in units of its length, at this step's nodes.
-    double basis[PFVI_STAGES_MAX][PFVI_STAGES_MAX] = {{0.}};   // (rows zero beyond s: rest_weights_of reads full rows)
+    // The last step's stages, in units of its length, at this step's nodes:
+    // the same for the same s and step ratio, so made again only when either
+    // changed since the last extrapolated step (the same inputs, the same
+    // bits).
+    const struct pfvi_rest_weights* rw = &st->predict_weights;
+    struct pfvi_rest_weights start_only;
     if (extrapolate){
         const double rho = h/st->predictor_h;
-        for (int j=0; j<st->rule.s; j++){
-            pfvi_lagrange_at(&st->rule, 1. + rho*st->rule.c[j], basis[j]);
+        if (st->predict_weights_s != st->rule.s || memcmp(&rho, &st->predict_weights_rho, sizeof(rho)) != 0){
+            double basis[PFVI_STAGES_MAX][PFVI_STAGES_MAX] = {{0.}};   // (rows zero beyond s: rest_weights_of reads full rows)
+            for (int j=0; j<st->rule.s; j++){
+                pfvi_lagrange_at(&st->rule, 1. + rho*st->rule.c[j], basis[j]);
+            }
+            rest_weights_of(&st->rule, (const double (*)[PFVI_STAGES_MAX])basis, &st->predict_weights);
+            st->predict_weights_s = st->rule.s;
+            st->predict_weights_rho = rho;
         }
+    }else{
+        rest_weights_of(&st->rule, NULL, &start_only);
+        rw = &start_only;
     }
-    struct rest_weights rw;
-    rest_weights_of(&st->rule, extrapolate ? (const double (*)[PFVI_STAGES_MAX])basis : NULL, &rw);
     for (size_t o=0; o<N; o++){
-        predict_body(st, field, st->newton_order[o], h, &rw);
+        predict_body(st, field, st->newton_order[o], h, rw);
     }
 }
