@@ -53,28 +53,51 @@
 
 // LU factorisation with partial pivoting of the n x n matrix A (n <= 8) in
 // place, and the pivots' reciprocals; 0 if a pivot is zero or not finite.
+// A row of A (LU_MAX = 8 doubles) is two vectors of lanes: a row swap is
+// the whole row's (the columns beyond n are never read), and the
+// elimination A[i][j] -= g A[k][j] is made in every lane, the result kept
+// only in the lanes j > k (the others, L's entries and A[i][k], as they
+// were): each kept lane is the scalar loop's operation, the same bits.
+typedef long long lane_mask __attribute__((vector_size(4*sizeof(long long))));
+typedef char lu_rows_are_two_vectors[(LU_MAX == 8) ? 1 : -1];
+
+static inline __attribute__((always_inline)) pfvi_lanes lanes_where(lane_mask m, pfvi_lanes yes, pfvi_lanes no){
+    return (pfvi_lanes)(((lane_mask)yes & m) | ((lane_mask)no & ~m));
+}
+
 static inline __attribute__((always_inline)) int lu_factor(int n, double (*A)[LU_MAX], int* piv, double* inverse){
+    const lane_mask column_lo = {0, 1, 2, 3}, column_hi = {4, 5, 6, 7};
     for (int k=0; k<n; k++){
         int p = k;
         for (int i=k+1; i<n; i++){
             p = (fabs(A[i][k]) > fabs(A[p][k])) ? i : p;
         }
         piv[k] = p;
+        pfvi_lanes rk_lo, rk_hi;
+        memcpy(&rk_lo, &A[p][0], sizeof(rk_lo));
+        memcpy(&rk_hi, &A[p][4], sizeof(rk_hi));
         if (p != k){
-            for (int j=0; j<n; j++){
-                const double t = A[k][j]; A[k][j] = A[p][j]; A[p][j] = t;
-            }
+            memcpy(&A[p][0], &A[k][0], sizeof(A[p]));
+            memcpy(&A[k][0], &rk_lo, sizeof(rk_lo));
+            memcpy(&A[k][4], &rk_hi, sizeof(rk_hi));
         }
         if (!(A[k][k] != 0.) || !isfinite(A[k][k])){
             return 0;
         }
         inverse[k] = 1./A[k][k];
+        const lane_mask kk = {k, k, k, k};
+        const lane_mask right_lo = column_lo > kk, right_hi = column_hi > kk;
         for (int i=k+1; i<n; i++){
             const double g = A[i][k]*inverse[k];
+            const pfvi_lanes G = {g, g, g, g};
+            pfvi_lanes lo, hi;
+            memcpy(&lo, &A[i][0], sizeof(lo));
+            memcpy(&hi, &A[i][4], sizeof(hi));
+            lo = lanes_where(right_lo, lo - G*rk_lo, lo);
+            hi = lanes_where(right_hi, hi - G*rk_hi, hi);
+            memcpy(&A[i][0], &lo, sizeof(lo));
+            memcpy(&A[i][4], &hi, sizeof(hi));
             A[i][k] = g;
-            for (int j=k+1; j<n; j++){
-                A[i][j] -= g*A[k][j];
-            }
         }
     }
     return 1;
