@@ -61,9 +61,9 @@
 typedef long long lane_mask __attribute__((vector_size(4*sizeof(long long))));
 typedef char lu_rows_are_two_vectors[(LU_MAX == 8) ? 1 : -1];
 
-static inline __attribute__((always_inline)) pfvi_lanes lanes_where(lane_mask m, pfvi_lanes yes, pfvi_lanes no){
-    return (pfvi_lanes)(((lane_mask)yes & m) | ((lane_mask)no & ~m));
-}
+// yes in the lanes where the mask m is set, no elsewhere (a macro: a
+// function returning vectors would change its ABI between the clones)
+#define lanes_where(m, yes, no) ((pfvi_lanes)(((lane_mask)(yes) & (m)) | ((lane_mask)(no) & ~(m))))
 
 static inline __attribute__((always_inline)) int lu_factor(int n, double (*A)[LU_MAX], int* piv, double* inverse){
     const lane_mask column_lo = {0, 1, 2, 3}, column_hi = {4, 5, 6, 7};
@@ -734,6 +734,7 @@ void pfvi_newton_correct_variational(struct pfvi_state* st, size_t N){
 
 /* ------------------------------------------------ the rounds and their stop */
 
+PFVI_VECTOR_CLONES
 double pfvi_solve_change(const double (*y)[3], const double (*yn)[3], const double* q0, int increment, int s,
         double scale){
     double diff = 0.;
@@ -742,16 +743,48 @@ double pfvi_solve_change(const double (*y)[3], const double (*yn)[3], const doub
         scale = (q > scale) ? q : scale;
         scale = (d > scale) ? d : scale;
     }
-    // (the largest difference, and their sum only to carry a NaN through)
-    double any = 0.;
-    for (int j=0; j<s-1; j++){
-        for (int c=0; c<3; c++){
-            const double d = fabs(yn[j][c] - y[j][c]);
-            diff = (d > diff) ? d : diff;
-            any += d;
-        }
+    // The largest difference, four at a time (the rows' 3 (s - 1) values
+    // are contiguous): the largest of a set is the same in any order. A
+    // difference that is not a number is found beside it; then the scalar
+    // loop below gives the result (its sum carries that NaN through).
+    const double* const a = &y[0][0];
+    const double* const b = &yn[0][0];
+    const int n = 3*(s - 1);
+    const lane_mask magnitude = {INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX};
+    pfvi_lanes most = {0., 0., 0., 0.};
+    lane_mask nan = {0, 0, 0, 0};
+    int l = 0;
+    for (; l + 4 <= n; l+=4){
+        pfvi_lanes x, xn;
+        memcpy(&x, a + l, sizeof(x));
+        memcpy(&xn, b + l, sizeof(xn));
+        const pfvi_lanes d = (pfvi_lanes)((lane_mask)(xn - x) & magnitude);   // fabs: the sign bit cleared
+        most = lanes_where(d > most, d, most);
+        nan |= (d != d);
     }
-    diff = (any == any) ? diff : any;
+    double lanes[4];
+    memcpy(lanes, &most, sizeof(lanes));
+    int finite = ((nan[0] | nan[1]) | (nan[2] | nan[3])) == 0;
+    for (int k=0; k<4; k++){
+        diff = (lanes[k] > diff) ? lanes[k] : diff;
+    }
+    for (; l<n; l++){
+        const double d = fabs(b[l] - a[l]);
+        diff = (d > diff) ? d : diff;
+        finite &= (d == d);
+    }
+    if (!finite){
+        // (the largest difference, and their sum only to carry a NaN through)
+        double any = 0.;
+        for (int j=0; j<s-1; j++){
+            for (int c=0; c<3; c++){
+                const double d = fabs(yn[j][c] - y[j][c]);
+                diff = (d > diff) ? d : diff;
+                any += d;
+            }
+        }
+        diff = (any == any) ? diff : any;
+    }
     return (scale > 0.) ? diff/scale : diff;
 }
 
