@@ -80,14 +80,19 @@ int pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, s
     double (*restrict X)[3][LANES] = st->gravity_x;
     double (*restrict A)[3][LANES] = st->gravity_a;
     // Lane l holds stage l; lanes outside k0 .. k1 repeat the nearest
-    // stage (finite values, computed and dropped).
+    // stage (finite values, computed and dropped). (Each lane's stage
+    // chosen once, not per component and body.)
+    int stage_of[LANES];
+    for (int l=0; l<LANES; l++){
+        stage_of[l] = (l < k0) ? k0 : (l > k1) ? k1 : l;
+    }
+    memset(A, 0, N*sizeof(*A));
     for (size_t i=0; i<N; i++){
-        for (int c=0; c<3; c++){
-            for (int l=0; l<LANES; l++){
-                const int k = (l < k0) ? k0 : (l > k1) ? k1 : l;
-                X[i][c][l] = x[i][k][c];
-                A[i][c][l] = 0.;
-            }
+        for (int l=0; l<LANES; l++){
+            const int k = stage_of[l];
+            X[i][0][l] = x[i][k][0];
+            X[i][1][l] = x[i][k][1];
+            X[i][2][l] = x[i][k][2];
         }
     }
     for (size_t i=1; i<N_active; i++){
