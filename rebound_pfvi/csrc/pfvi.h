@@ -937,6 +937,12 @@ struct pfvi_state {
     struct pfvi_lobatto rule;
     struct pfvi_stage_fit stage_classical;  // the rule's fit at u = 0, copied where omega is 0 ("none")
     struct pfvi_stage_fit* stage_fit;
+    // stage_fit_classical[i] = s where stage_fit[i] is a copy of the
+    // classical fit of s stages (stage_classical, the same for every rule
+    // of s), 0 otherwise: a classical particle's fit, the same at every
+    // step, is then not copied again (pfvi_stages.c). Cleared whenever the
+    // buffers grow.
+    unsigned char* stage_fit_classical;
     double (*stage_a)[PFVI_STAGES_MAX][3];
     double (*predictor_a)[PFVI_STAGES_MAX][3];
     // The positions at which stage_a (predictor_a) were evaluated or

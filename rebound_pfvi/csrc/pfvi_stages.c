@@ -523,12 +523,18 @@ static int stages_prepare(struct pfvi_state* st, double h){
 }
 
 static enum pfvi_fit_status stages_fit(struct pfvi_state* st, size_t i, double omega, double h){
+    const int s = st->rule.s;
     if (omega == 0.){
-        // u = 0: the classical coefficients, the same at every step.
-        st->stage_fit[i] = st->stage_classical;
+        // u = 0: the classical coefficients, the same at every step (copied
+        // only if this particle's fit is not already them).
+        if (st->stage_fit_classical[i] != s){
+            st->stage_fit[i] = st->stage_classical;
+            st->stage_fit_classical[i] = (unsigned char)s;
+        }
         st->solve_form[i] = &st->solve_form_classical;
         return PFVI_FIT_OK;
     }
+    st->stage_fit_classical[i] = 0;
     const enum pfvi_fit_status status = pfvi_stage_fit(&st->rule, omega, h, st->options.u_max, st->options.fitting,
             &st->stage_fit[i]);
     if (st->stage_fit[i].classical){
@@ -541,7 +547,11 @@ static enum pfvi_fit_status stages_fit(struct pfvi_state* st, size_t i, double o
 }
 
 static void stages_copy_fit(struct pfvi_state* st, size_t i, size_t from){
-    st->stage_fit[i] = st->stage_fit[from];
+    // (not again if both are the same classical fit already)
+    if (st->stage_fit_classical[from] == 0 || st->stage_fit_classical[i] != st->stage_fit_classical[from]){
+        st->stage_fit[i] = st->stage_fit[from];
+        st->stage_fit_classical[i] = st->stage_fit_classical[from];
+    }
     st->solve_form[i] = st->solve_form[from];
 }
 

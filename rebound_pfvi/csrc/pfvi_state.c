@@ -27,6 +27,7 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->dv);
     free(st->compensation);
     free(st->stage_fit);
+    free(st->stage_fit_classical);
     free(st->stage_a);
     free(st->predictor_a);
     free(st->stage_x);
@@ -113,6 +114,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->dx = pfvi_grow(st->dx, N*sizeof(*st->dx), &ok);
     st->dv = pfvi_grow(st->dv, N*sizeof(*st->dv), &ok);
     st->stage_fit = pfvi_grow(st->stage_fit, N*sizeof(*st->stage_fit), &ok);
+    st->stage_fit_classical = pfvi_grow(st->stage_fit_classical, N*sizeof(*st->stage_fit_classical), &ok);
     st->stage_a = pfvi_grow(st->stage_a, N*sizeof(*st->stage_a), &ok);
     st->predictor_a = pfvi_grow(st->predictor_a, N*sizeof(*st->predictor_a), &ok);
     st->stage_x = pfvi_grow(st->stage_x, N*sizeof(*st->stage_x), &ok);
@@ -151,6 +153,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
         st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_MEMORY, .n = N};
         return 0;
     }
+    memset(st->stage_fit_classical, 0, N*sizeof(*st->stage_fit_classical));   // (what the fits hold is not known)
     st->N_allocated = N;
     return 1;
 }
