@@ -998,6 +998,15 @@ struct pfvi_state {
     // only on s and the step ratio h/predictor_h: kept for the last ratio,
     // made again only when it or s changes (the steady track's steps are
     // equal). Not saved (0: none kept).
+    // The symmetric control's constants of the options (pfvi_control.c:
+    // kappa, the effective epsilon, the resolution check's threshold), which
+    // depend only on s and epsilon: made again when either changes (pow's
+    // results for the same arguments). Not saved (stages 0: none kept).
+    struct pfvi_symmetric_constants {
+        int stages;
+        double epsilon;
+        double kappa, epsilon_effective, u_target, above;
+    } symmetric_constants;
     int predict_weights_s;
     double predict_weights_rho;
     struct pfvi_rest_weights {
