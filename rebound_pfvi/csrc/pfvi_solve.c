@@ -1060,19 +1060,19 @@ static void kepler_pull(const double r[3], double mu, double softening2, double 
 // The lanes k of last_t and start hold each sum in the scalar loop's order
 // (j, then m, ascending), so the vector loops give the scalar loops' bits.
 PFVI_VECTOR_CLONES
-static void rest_weights_of(const struct pfvi_lobatto* rule, const double (*basis)[PFVI_STAGES_MAX],
+static void rest_weights_of(const struct pfvi_lobatto* rule, const double (*basis_t)[PFVI_STAGES_MAX],
         struct pfvi_rest_weights* rw){
     const int s = rule->s;
-    rw->extrapolated = (basis != NULL);
+    rw->extrapolated = (basis_t != NULL);
     memset(rw->start, 0, sizeof(rw->start));
     for (int k=1; k<s; k++){
         double start = rule->nu[k][0]*rule->w[0];
-        for (int j=1; !basis && j<s-1; j++){
+        for (int j=1; !basis_t && j<s-1; j++){
             start += rule->nu[k][j]*rule->w[j];
         }
         rw->start[k] = start;
     }
-    if (!basis){
+    if (!basis_t){
         return;
     }
     pfvi_lanes nuw[PFVI_STAGES_MAX][2];   // nu[k][j] w_j, lanes k
@@ -1086,7 +1086,7 @@ static void rest_weights_of(const struct pfvi_lobatto* rule, const double (*basi
     for (int m=0; m<PFVI_STAGES_MAX; m++){
         pfvi_lanes lo = {0., 0., 0., 0.}, hi = {0., 0., 0., 0.};
         for (int j=1; j<s-1; j++){
-            const double b = basis[j][m];
+            const double b = basis_t[m][j];
             const pfvi_lanes bb = {b, b, b, b};
             lo += nuw[j][0]*bb;
             hi += nuw[j][1]*bb;
@@ -1251,6 +1251,40 @@ static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, 
     }
 }
 
+// basis_t[m][j] = l_m(1 + rho c^j), the last step's Lagrange basis at this
+// step's nodes, transposed (rows m < s; the others left as they are):
+// pfvi_lagrange_at for every j at once, the nodes j as vector lanes, each
+// lane its operations in its order (the same bits).
+PFVI_VECTOR_CLONES
+static void lagrange_basis(const struct pfvi_lobatto* rule, double rho, double (*basis_t)[PFVI_STAGES_MAX]){
+#define ALL(x) ((pfvi_lanes){(x), (x), (x), (x)})
+    const int s = rule->s;
+    double tau[PFVI_STAGES_MAX] = {1., 1., 1., 1., 1., 1., 1., 1.};
+    for (int j=0; j<s; j++){
+        tau[j] = 1. + rho*rule->c[j];
+    }
+    pfvi_lanes t_lo, t_hi;
+    memcpy(&t_lo, tau, sizeof(t_lo));
+    memcpy(&t_hi, tau + 4, sizeof(t_hi));
+    pfvi_lanes below_lo[PFVI_STAGES_MAX], below_hi[PFVI_STAGES_MAX];
+    below_lo[0] = ALL(1.);
+    below_hi[0] = ALL(1.);
+    for (int n=1; n<s; n++){
+        below_lo[n] = below_lo[n-1]*(t_lo - ALL(rule->c[n-1]));
+        below_hi[n] = below_hi[n-1]*(t_hi - ALL(rule->c[n-1]));
+    }
+    pfvi_lanes above_lo = ALL(1.), above_hi = ALL(1.);
+    for (int m=s-1; m>=0; m--){
+        const pfvi_lanes lo = ALL(rule->lagrange[m])*(below_lo[m]*above_lo);
+        const pfvi_lanes hi = ALL(rule->lagrange[m])*(below_hi[m]*above_hi);
+        memcpy(&basis_t[m][0], &lo, sizeof(lo));
+        memcpy(&basis_t[m][4], &hi, sizeof(hi));
+        above_lo *= t_lo - ALL(rule->c[m]);
+        above_hi *= t_hi - ALL(rule->c[m]);
+    }
+#undef ALL
+}
+
 void pfvi_solve_predict(struct pfvi_state* st, size_t N, const struct pfvi_field* field, double h, int extrapolate){
     // The last step's stages, in units of its length, at this step's nodes:
     // the same for the same s and step ratio, so made again only when either
@@ -1261,11 +1295,9 @@ void pfvi_solve_predict(struct pfvi_state* st, size_t N, const struct pfvi_field
     if (extrapolate){
         const double rho = h/st->predictor_h;
         if (st->predict_weights_s != st->rule.s || memcmp(&rho, &st->predict_weights_rho, sizeof(rho)) != 0){
-            double basis[PFVI_STAGES_MAX][PFVI_STAGES_MAX] = {{0.}};   // (rows zero beyond s: rest_weights_of reads full rows)
-            for (int j=0; j<st->rule.s; j++){
-                pfvi_lagrange_at(&st->rule, 1. + rho*st->rule.c[j], basis[j]);
-            }
-            rest_weights_of(&st->rule, (const double (*)[PFVI_STAGES_MAX])basis, &st->predict_weights);
+            double basis_t[PFVI_STAGES_MAX][PFVI_STAGES_MAX] = {{0.}};   // (rows zero beyond s: rest_weights_of reads every m)
+            lagrange_basis(&st->rule, rho, basis_t);
+            rest_weights_of(&st->rule, (const double (*)[PFVI_STAGES_MAX])basis_t, &st->predict_weights);
             st->predict_weights_s = st->rule.s;
             st->predict_weights_rho = rho;
         }
