@@ -968,6 +968,10 @@ struct pfvi_state {
     const struct pfvi_solve_form** solve_form;
     struct pfvi_solve_form* solve_forms;
     struct pfvi_solve_form solve_form_classical;
+    // The s and h solve_form_classical was made for (0: none): it depends on
+    // nothing else, and is made again only when either changes.
+    int solve_form_classical_s;
+    double solve_form_classical_h;
     double (*solve_x)[PFVI_STAGES_MAX][3];
     struct pfvi_newton* newton;
     size_t* newton_order;

@@ -518,7 +518,11 @@ static int stages_prepare(struct pfvi_state* st, double h){
         st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_UNDERFLOW, .h = h, .n = (size_t)st->rule.s};
         return 0;
     }
-    classical_form(&st->rule, h, &st->solve_form_classical);
+    if (st->solve_form_classical_s != st->rule.s || memcmp(&st->solve_form_classical_h, &h, sizeof(h)) != 0){
+        classical_form(&st->rule, h, &st->solve_form_classical);
+        st->solve_form_classical_s = st->rule.s;
+        st->solve_form_classical_h = h;
+    }
     return 1;
 }
 
