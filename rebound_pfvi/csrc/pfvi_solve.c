@@ -68,9 +68,14 @@ typedef char lu_rows_are_two_vectors[(LU_MAX == 8) ? 1 : -1];
 static inline __attribute__((always_inline)) int lu_factor(int n, double (*A)[LU_MAX], int* piv, double* inverse){
     const lane_mask column_lo = {0, 1, 2, 3}, column_hi = {4, 5, 6, 7};
     for (int k=0; k<n; k++){
+        // (the pivot's magnitude carried beside its row: the same
+        // comparisons as fabs(A[i][k]) > fabs(A[p][k]))
         int p = k;
+        double largest = fabs(A[k][k]);
         for (int i=k+1; i<n; i++){
-            p = (fabs(A[i][k]) > fabs(A[p][k])) ? i : p;
+            const double a = fabs(A[i][k]);
+            p = (a > largest) ? i : p;
+            largest = (a > largest) ? a : largest;
         }
         piv[k] = p;
         pfvi_lanes rk_lo, rk_hi;
@@ -210,16 +215,16 @@ static inline __attribute__((always_inline)) void newton_factor_classical_rest(c
         for (int c=0; c<K; c++){
             hrow[c] = u->Q[k-1][1 + c];
         }
-        double out[8];
+        // (whole rows of C: the lanes c >= K are never read)
+        double identity[8] = {0., 0., 0., 0., 0., 0., 0., 0.};
+        identity[k-1] = 1.;
         for (int h=0; h<2; h++){
-            pfvi_lanes H;
+            pfvi_lanes H, I;
             memcpy(&H, hrow + 4*h, sizeof(H));
+            memcpy(&I, identity + 4*h, sizeof(I));
             const pfvi_lanes nn = ALL(n[k][0])*NX[h] + ALL(n[k][1])*NY[h] + ALL(n[k][2])*NZ[h];
-            const pfvi_lanes v = (D[h]*H)*nn;
-            memcpy(out + 4*h, &v, sizeof(v));
-        }
-        for (int c=0; c<K; c++){
-            u->C[k-1][c] = ((k == 1 + c) ? 1. : 0.) + out[c];
+            const pfvi_lanes v = I + (D[h]*H)*nn;
+            memcpy(&u->C[k-1][4*h], &v, sizeof(v));
         }
     }
 #undef ALL
