@@ -534,6 +534,22 @@ static void centre_start(const struct centre_ref* c, const struct pfvi_state* st
     }
 }
 
+// centre_start's position alone (the same operations).
+static void centre_start_position(const struct centre_ref* c, const struct pfvi_state* st, double x[3]){
+    const struct reb_particle* const pp = &st->start[c->p];
+    const double px[3] = {pp->x, pp->y, pp->z};
+    for (int d=0; d<3; d++){
+        x[d] = px[d] + c->g[d];
+    }
+    if (c->q != SIZE_MAX){
+        const struct reb_particle* const pq = &st->start[c->q];
+        const double qx[3] = {pq->x, pq->y, pq->z};
+        for (int d=0; d<3; d++){
+            x[d] = (1. - c->w)*x[d] + c->w*(qx[d] + c->g[d] + c->gq[d]);
+        }
+    }
+}
+
 // The units of a step: each particle's kind, the pair its partner may be
 // in, and an order in which every body comes after what it is corrected
 // about (a cycle longer than a pair is cut where the chain closes: that
@@ -807,8 +823,8 @@ static void solve_scales(struct pfvi_state* st, size_t N, const struct pfvi_fiel
             continue;
         }
         const struct centre_ref c = centre_of(st, field, i);
-        double xc[3], vc[3], ac[3];
-        centre_start(&c, st, xc, vc, ac);
+        double xc[3];
+        centre_start_position(&c, st, xc);
         const struct reb_particle* const p = &st->start[i];
         const double r[3] = {fabs(p->x - xc[0]), fabs(p->y - xc[1]), fabs(p->z - xc[2])};
         const double largest = fmax(r[0], fmax(r[1], r[2]));
