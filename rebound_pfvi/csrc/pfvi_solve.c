@@ -684,14 +684,40 @@ static void newton_correct_unit(struct pfvi_state* st, size_t i, const double (*
             }
         }
         newton_apply(f, u, b);
-        for (int l=0; l<m; l++){
-            for (int c=0; c<3; c++){
-                const double bi = yn[vi][l][c] - y[vi][l][c], bp = yn[vp][l][c] - y[vp][l][c];
-                // Tiny masses: as mass fractions (m*b underflows; PFVI_MASS_TINY).
-                const double cm = (M > PFVI_MASS_TINY) ? (mi*bi + mp*bp)/M : (mi/M)*bi + (mp/M)*bp;
-                yn[vi][l][c] = y[vi][l][c] + (cm + (mp/M)*b[l][c]);
-                yn[vp][l][c] = y[vp][l][c] + (cm - (mi/M)*b[l][c]);
+        // The rows' 3 m values are contiguous: four at a time in vector
+        // lanes, each lane the scalar expression below (the same bits),
+        // then the rest one by one.
+        double* const yni = &yn[vi][0][0];
+        double* const ynp = &yn[vp][0][0];
+        const double* const yi = &y[vi][0][0];
+        const double* const yp = &y[vp][0][0];
+        const double* const bb = &b[0][0];
+        const int n = 3*m;
+        int e = 0;
+        if (M > PFVI_MASS_TINY){
+#define ALL(x) ((pfvi_lanes){(x), (x), (x), (x)})
+            const pfvi_lanes MI = ALL(mi), MP = ALL(mp), MM = ALL(M), WP = ALL(mp/M), WI = ALL(mi/M);
+#undef ALL
+            for (; e + 4 <= n; e+=4){
+                pfvi_lanes a_i, a_p, x_i, x_p, B;
+                memcpy(&a_i, yni + e, sizeof(a_i));
+                memcpy(&a_p, ynp + e, sizeof(a_p));
+                memcpy(&x_i, yi + e, sizeof(x_i));
+                memcpy(&x_p, yp + e, sizeof(x_p));
+                memcpy(&B, bb + e, sizeof(B));
+                const pfvi_lanes bi = a_i - x_i, bp = a_p - x_p;
+                const pfvi_lanes cm = (MI*bi + MP*bp)/MM;
+                const pfvi_lanes ni = x_i + (cm + WP*B), np = x_p + (cm - WI*B);
+                memcpy(yni + e, &ni, sizeof(ni));
+                memcpy(ynp + e, &np, sizeof(np));
             }
+        }
+        for (; e<n; e++){
+            const double bi = yni[e] - yi[e], bp = ynp[e] - yp[e];
+            // Tiny masses: as mass fractions (m*b underflows; PFVI_MASS_TINY).
+            const double cm = (M > PFVI_MASS_TINY) ? (mi*bi + mp*bp)/M : (mi/M)*bi + (mp/M)*bp;
+            yni[e] = yi[e] + (cm + (mp/M)*bb[e]);
+            ynp[e] = yp[e] + (cm - (mi/M)*bb[e]);
         }
         return;
     }
