@@ -608,12 +608,25 @@ struct pfvi_output_particle {
 // softening, which bodies attract (index < N_active, m > 0), and the ghost
 // boxes the force sums over (position and velocity shifts of an image; the
 // box itself first, and image n_images - 1 - g mirrors image g).
+// Four particles' coordinates, velocities and masses as vector lanes, for
+// the pair scans of pfvi_timescales.c (doubles: realloc's alignment).
+struct pfvi_lanes_block {
+    double x[4], y[4], z[4], vx[4], vy[4], vz[4], m[4];
+};
+
 struct pfvi_field {
     double G;
     double softening2;
     size_t N_active;
     size_t n_images;
     const struct reb_vec6d* images;
+    // Scratch for the pair scans (pfvi_timescales.c): particles 4 b .. 4 b + 3
+    // in blocks[b], filled by pfvi_partner_search from its particles (and
+    // read by pfvi_step_density, which calls it first with the same ones);
+    // NULL, or room for fewer than N particles: each block gathered where
+    // it is used.
+    struct pfvi_lanes_block* blocks;
+    size_t blocks_N;
 };
 
 // A body's partner: the attracting body j != i (j < N_active, m_j > 0), or
@@ -1013,6 +1026,8 @@ struct pfvi_state {
     } symmetric_constants;
     int predict_weights_s;
     double predict_weights_rho;
+    struct pfvi_lanes_block* field_blocks;   // struct pfvi_field's blocks (pfvi_field_of), for field_blocks_N particles
+    size_t field_blocks_N;
     struct pfvi_rest_weights {
         int extrapolated;
         double start[PFVI_STAGES_MAX];

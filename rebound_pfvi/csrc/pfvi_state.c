@@ -28,6 +28,7 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->compensation);
     free(st->stage_fit);
     free(st->stage_fit_classical);
+    free(st->field_blocks);
     free(st->stage_a);
     free(st->predictor_a);
     free(st->stage_x);
@@ -455,12 +456,23 @@ int pfvi_field_of(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_f
         st->images_allocated = n;
     }
     pfvi_ghost_boxes(r, st->images);
+    if (r->N > st->field_blocks_N){
+        // (grown with N only; without it the scans gather as they go)
+        const size_t n_blocks = (r->N + 3)/4;
+        struct pfvi_lanes_block* const blocks = realloc(st->field_blocks, n_blocks*sizeof(*blocks));
+        if (blocks){
+            st->field_blocks = blocks;
+            st->field_blocks_N = 4*n_blocks;
+        }
+    }
     *f = (struct pfvi_field){
         .G = (r->gravity == REB_GRAVITY_NONE) ? 0. : r->G,
         .softening2 = r->softening*r->softening,
         .N_active = r->N_active,
         .n_images = n,
         .images = st->images,
+        .blocks = st->field_blocks,
+        .blocks_N = st->field_blocks_N,
     };
     return 1;
 }
