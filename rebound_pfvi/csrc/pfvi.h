@@ -621,12 +621,25 @@ struct pfvi_output_particle {
 // softening, which bodies attract (index < N_active, m > 0), and the ghost
 // boxes the force sums over (position and velocity shifts of an image; the
 // box itself first, and image n_images - 1 - g mirrors image g).
+// Four particles' coordinates, velocities and masses as vector lanes, for
+// the pair scans of pfvi_timescales.c (doubles: realloc's alignment).
+struct pfvi_lanes_block {
+    double x[4], y[4], z[4], vx[4], vy[4], vz[4], m[4];
+};
+
 struct pfvi_field {
     double G;
     double softening2;
     size_t N_active;
     size_t n_images;
     const struct reb_vec6d* images;
+    // Scratch for the pair scans (pfvi_timescales.c): particles 4 b .. 4 b + 3
+    // in blocks[b], filled by pfvi_partner_search from its particles (and
+    // read by pfvi_step_density, which calls it first with the same ones);
+    // NULL, or room for fewer than N particles: each block gathered where
+    // it is used.
+    struct pfvi_lanes_block* blocks;
+    size_t blocks_N;
 };
 
 // A body's partner: the attracting body j != i (j < N_active, m_j > 0), or
@@ -950,6 +963,12 @@ struct pfvi_state {
     struct pfvi_lobatto rule;
     struct pfvi_stage_fit stage_classical;  // the rule's fit at u = 0, copied where omega is 0 ("none")
     struct pfvi_stage_fit* stage_fit;
+    // stage_fit_classical[i] = s where stage_fit[i] is a copy of the
+    // classical fit of s stages (stage_classical, the same for every rule
+    // of s), 0 otherwise: a classical particle's fit, the same at every
+    // step, is then not copied again (pfvi_stages.c). Cleared whenever the
+    // buffers grow.
+    unsigned char* stage_fit_classical;
     double (*stage_a)[PFVI_STAGES_MAX][3];
     double (*predictor_a)[PFVI_STAGES_MAX][3];
     // The positions at which stage_a (predictor_a) were evaluated or
@@ -975,6 +994,10 @@ struct pfvi_state {
     const struct pfvi_solve_form** solve_form;
     struct pfvi_solve_form* solve_forms;
     struct pfvi_solve_form solve_form_classical;
+    // The s and h solve_form_classical was made for (0: none): it depends on
+    // nothing else, and is made again only when either changes.
+    int solve_form_classical_s;
+    double solve_form_classical_h;
     double (*solve_x)[PFVI_STAGES_MAX][3];
     struct pfvi_newton* newton;
     size_t* newton_order;
@@ -1000,6 +1023,29 @@ struct pfvi_state {
     size_t predictor_N;
     double predictor_h;
     double predictor_t;            // t at its end
+    // The two-body predictor's rest weights (pfvi_solve.c: the last step's
+    // Lagrange basis at this step's nodes, and their integral), which depend
+    // only on s and the step ratio h/predictor_h: kept for the last ratio,
+    // made again only when it or s changes (the steady track's steps are
+    // equal). Not saved (0: none kept).
+    // The symmetric control's constants of the options (pfvi_control.c:
+    // kappa, the effective epsilon, the resolution check's threshold), which
+    // depend only on s and epsilon: made again when either changes (pow's
+    // results for the same arguments). Not saved (stages 0: none kept).
+    struct pfvi_symmetric_constants {
+        int stages;
+        double epsilon;
+        double kappa, epsilon_effective, u_target, above;
+    } symmetric_constants;
+    int predict_weights_s;
+    double predict_weights_rho;
+    struct pfvi_lanes_block* field_blocks;   // struct pfvi_field's blocks (pfvi_field_of), for field_blocks_N particles
+    size_t field_blocks_N;
+    struct pfvi_rest_weights {
+        int extrapolated;
+        double start[PFVI_STAGES_MAX];
+        double last_t[PFVI_STAGES_MAX][PFVI_STAGES_MAX];   // last[k][m] as last_t[m][k]: the stages k as lanes
+    } predict_weights;
     size_t cache_N;                // >0: `end` describes the particles, taken at cache_t under cache_model
     size_t end_N;                  // >0: `end` holds the particles as the last step left them (edits are
                                    // found against it; REBOUND's synchronize clears cache_N, not this)
@@ -1156,9 +1202,10 @@ PFVI_INTERNAL int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi
 // pfvi_gravity.c: whether REBOUND's routine would compute only its basic
 // gravity (no additional forces, variations, ghost boxes or ignored terms),
 // which pfvi_gravity_stages then computes at stages k0 .. k1 of positions x
-// into a in one pass, bit for bit as REBOUND would stage by stage.
+// into a in one pass, bit for bit as REBOUND would stage by stage; 0 if a
+// force is not finite (a is written all the same).
 PFVI_INTERNAL int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st, size_t N);
-PFVI_INTERNAL void pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
+PFVI_INTERNAL int pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
         const double (*x)[PFVI_STAGES_MAX][3], double (*a)[PFVI_STAGES_MAX][3], int k0, int k1);
 PFVI_INTERNAL void pfvi_track_added(struct pfvi_state* st);
 PFVI_INTERNAL void pfvi_track_removed(struct pfvi_state* st, size_t index);

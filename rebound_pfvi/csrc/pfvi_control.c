@@ -17,6 +17,7 @@
  * that REBOUND's exact_finish_time can shorten it as it does for IAS15.
  */
 #include <math.h>
+#include <string.h>
 #include "pfvi.h"
 
 // The frequency of the controller's u bound: the fixed omega, or the curvature one.
@@ -286,11 +287,32 @@ static double factorial(int n){
 // a particle whose u against its net acceleration is above u_low, the
 // lowest u a decision below looks at, is measured against the pulls on it
 // too (pfvi_trial_resolution: a cancelled acceleration is not an unresolved one).
+// (above: pow(u_low, s - 1)/(s - 1)!, from symmetric_constants)
 static double symmetric_resolution(const struct reb_simulation* r, const struct pfvi_state* st, size_t N, double h,
-        const struct pfvi_field* field, double u_low){
+        const struct pfvi_field* field, double above){
     const int s = st->options.stages;
-    const double above = pow(u_low, s - 1.)/factorial(s - 1);
     return pow(factorial(s - 1)*pfvi_trial_resolution(r, st, N, h, field, above, 0).ratio, 1./(s - 1.));
+}
+
+// kappa, the effective epsilon, u_target and the resolution check's
+// threshold for the options' s and epsilon: made when either changed since
+// the last step (the same arguments, the same results: the memo saves the
+// powers, not their bits).
+static const struct pfvi_symmetric_constants* symmetric_constants(struct pfvi_state* st){
+    static const double resolution_constant[PFVI_STAGES_MAX + 1] = PFVI_RESOLUTION_CONSTANTS;
+    const struct pfvi_options* const o = &st->options;
+    struct pfvi_symmetric_constants* const m = &st->symmetric_constants;
+    if (m->stages != o->stages || memcmp(&m->epsilon, &o->epsilon, sizeof(o->epsilon)) != 0){
+        const int s = o->stages;
+        m->stages = s;
+        m->epsilon = o->epsilon;
+        m->kappa = symmetric_kappa(o);
+        m->epsilon_effective = symmetric_epsilon(o);
+        m->u_target = resolution_constant[s]*m->kappa;
+        const double u_low = m->u_target/PFVI_RESOLUTION_SLACK;
+        m->above = pow(u_low, s - 1.)/factorial(s - 1);
+    }
+    return m;
 }
 
 // Where a symmetric step starts on the track (struct pfvi_state): the
@@ -569,10 +591,11 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     static const double resolution_constant[PFVI_STAGES_MAX + 1] = PFVI_RESOLUTION_CONSTANTS;
     const struct pfvi_options* const o = &st->options;
     const double sign = copysign(1., r->dt);
-    const double kappa = symmetric_kappa(o);
-    const double u_target = resolution_constant[o->stages]*kappa;
+    const struct pfvi_symmetric_constants* const constants = symmetric_constants(st);
+    const double kappa = constants->kappa;
+    const double u_target = constants->u_target;
     const double sigma0 = st->density_sigma, g0 = st->density_dlog;
-    st->statistics.epsilon_effective = symmetric_epsilon(o);
+    st->statistics.epsilon_effective = constants->epsilon_effective;
     if (!(sigma0 > 0.)){
         // Without pairs: steps of sim.dt (halved where the solve does not
         // converge), no track.
@@ -687,7 +710,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
                 return 0.;
             }
             pfvi_step_density(r->particles, NULL, N, &field, o->stages, st->partners, &sigma1, &g1);
-            u = symmetric_resolution(r, st, N, sign*h, &field, u_target/PFVI_RESOLUTION_SLACK);
+            u = symmetric_resolution(r, st, N, sign*h, &field, constants->above);
             // (Both ends: a reversed step makes the same check.)
             const int jump = fmax(sigma0, sigma1)*lambda*h > PFVI_DENSITY_JUMP_MAX*kappa;
             // The error the stages imply, relative to the worst along
@@ -721,7 +744,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
             // resolution check would retake it had the solve converged).
             int resolved = 1;
             if (pfvi_field_of(r, st, &field)){
-                const double u_last = symmetric_resolution(r, st, N, sign*h, &field, u_target/PFVI_RESOLUTION_SLACK);
+                const double u_last = symmetric_resolution(r, st, N, sign*h, &field, constants->above);
                 resolved = !(pow(u_last/u_target, 2.*o->stages - 2.) > PFVI_RESOLUTION_MAX);
             }
             st->statistics.n_solve_halved += (uint64_t)resolved;

@@ -26,6 +26,7 @@
  * Everything else goes through REBOUND as before.
  */
 #include <math.h>
+#include <string.h>
 #include "pfvi.h"
 #include "boundary.h"
 
@@ -66,7 +67,7 @@ static inline __attribute__((always_inline)) void pair_terms(const double (*rest
 // Compiled twice, for AVX2 (4 lanes a vector) and for any x86-64 (SSE2, 2),
 // chosen by the processor at load time; elsewhere once. No FMA either way.
 PFVI_VECTOR_CLONES
-void pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
+int pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
         const double (*x)[PFVI_STAGES_MAX][3], double (*a)[PFVI_STAGES_MAX][3], int k0, int k1){
     const struct reb_particle* const ps = r->particles;
     const double G = r->G;
@@ -79,14 +80,25 @@ void pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, 
     double (*restrict X)[3][LANES] = st->gravity_x;
     double (*restrict A)[3][LANES] = st->gravity_a;
     // Lane l holds stage l; lanes outside k0 .. k1 repeat the nearest
-    // stage (finite values, computed and dropped).
+    // stage (finite values, computed and dropped). (Each lane's stage
+    // chosen once, not per component and body.)
+    int stage_of[LANES];
+    for (int l=0; l<LANES; l++){
+        stage_of[l] = (l < k0) ? k0 : (l > k1) ? k1 : l;
+    }
+    const pfvi_lanes zero = {0., 0., 0., 0.};
     for (size_t i=0; i<N; i++){
+        for (int l=0; l<LANES; l++){
+            const int k = stage_of[l];
+            X[i][0][l] = x[i][k][0];
+            X[i][1][l] = x[i][k][1];
+            X[i][2][l] = x[i][k][2];
+        }
         for (int c=0; c<3; c++){
-            for (int l=0; l<LANES; l++){
-                const int k = (l < k0) ? k0 : (l > k1) ? k1 : l;
-                X[i][c][l] = x[i][k][c];
-                A[i][c][l] = 0.;
-            }
+            // (stores of vectors, not memset: its rep stosb counts a byte an
+            // instruction under callgrind)
+            memcpy(&A[i][c][0], &zero, sizeof(zero));
+            memcpy(&A[i][c][4], &zero, sizeof(zero));
         }
     }
     for (size_t i=1; i<N_active; i++){
@@ -105,9 +117,26 @@ void pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, 
             }
         }
     }
+    // Whether every force is finite, as the caller's check of REBOUND's
+    // accelerations asks: a - a is 0 for a finite a and NaN otherwise, and a
+    // sum of them NaN if any is, in whatever order it is added. The lanes
+    // outside k0 .. k1 repeat a stage inside (the same inputs, the same
+    // forces), so all lanes give the verdict of k0 .. k1's.
+    pfvi_lanes nan = {0., 0., 0., 0.};
+    for (size_t i=0; i<N; i++){
+        for (int c=0; c<3; c++){
+            pfvi_lanes lo, hi;
+            memcpy(&lo, &A[i][c][0], sizeof(lo));
+            memcpy(&hi, &A[i][c][4], sizeof(hi));
+            nan += (lo - lo) + (hi - hi);
+        }
+    }
     for (size_t i=0; i<N; i++){
         for (int k=k0; k<=k1; k++){
             a[i][k][0] = A[i][0][k]; a[i][k][1] = A[i][1][k]; a[i][k][2] = A[i][2][k];
         }
     }
+    double lanes[4];
+    memcpy(lanes, &nan, sizeof(lanes));
+    return (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]) == 0.;
 }

@@ -53,28 +53,56 @@
 
 // LU factorisation with partial pivoting of the n x n matrix A (n <= 8) in
 // place, and the pivots' reciprocals; 0 if a pivot is zero or not finite.
+// A row of A (LU_MAX = 8 doubles) is two vectors of lanes: a row swap is
+// the whole row's (the columns beyond n are never read), and the
+// elimination A[i][j] -= g A[k][j] is made in every lane, the result kept
+// only in the lanes j > k (the others, L's entries and A[i][k], as they
+// were): each kept lane is the scalar loop's operation, the same bits.
+typedef long long lane_mask __attribute__((vector_size(4*sizeof(long long))));
+typedef char lu_rows_are_two_vectors[(LU_MAX == 8) ? 1 : -1];
+
+// yes in the lanes where the mask m is set, no elsewhere (a macro: a
+// function returning vectors would change its ABI between the clones)
+#define lanes_where(m, yes, no) ((pfvi_lanes)(((lane_mask)(yes) & (m)) | ((lane_mask)(no) & ~(m))))
+
 static inline __attribute__((always_inline)) int lu_factor(int n, double (*A)[LU_MAX], int* piv, double* inverse){
+    const lane_mask column_lo = {0, 1, 2, 3}, column_hi = {4, 5, 6, 7};
     for (int k=0; k<n; k++){
+        // (the pivot's magnitude carried beside its row: the same
+        // comparisons as fabs(A[i][k]) > fabs(A[p][k]))
         int p = k;
+        double largest = fabs(A[k][k]);
         for (int i=k+1; i<n; i++){
-            p = (fabs(A[i][k]) > fabs(A[p][k])) ? i : p;
+            const double a = fabs(A[i][k]);
+            p = (a > largest) ? i : p;
+            largest = (a > largest) ? a : largest;
         }
         piv[k] = p;
+        pfvi_lanes rk_lo, rk_hi;
+        memcpy(&rk_lo, &A[p][0], sizeof(rk_lo));
+        memcpy(&rk_hi, &A[p][4], sizeof(rk_hi));
         if (p != k){
-            for (int j=0; j<n; j++){
-                const double t = A[k][j]; A[k][j] = A[p][j]; A[p][j] = t;
-            }
+            memcpy(&A[p][0], &A[k][0], sizeof(A[p]));
+            memcpy(&A[k][0], &rk_lo, sizeof(rk_lo));
+            memcpy(&A[k][4], &rk_hi, sizeof(rk_hi));
         }
         if (!(A[k][k] != 0.) || !isfinite(A[k][k])){
             return 0;
         }
         inverse[k] = 1./A[k][k];
+        const lane_mask kk = {k, k, k, k};
+        const lane_mask right_lo = column_lo > kk, right_hi = column_hi > kk;
         for (int i=k+1; i<n; i++){
             const double g = A[i][k]*inverse[k];
+            const pfvi_lanes G = {g, g, g, g};
+            pfvi_lanes lo, hi;
+            memcpy(&lo, &A[i][0], sizeof(lo));
+            memcpy(&hi, &A[i][4], sizeof(hi));
+            lo = lanes_where(right_lo, lo - G*rk_lo, lo);
+            hi = lanes_where(right_hi, hi - G*rk_hi, hi);
+            memcpy(&A[i][0], &lo, sizeof(lo));
+            memcpy(&A[i][4], &hi, sizeof(hi));
             A[i][k] = g;
-            for (int j=k+1; j<n; j++){
-                A[i][j] -= g*A[k][j];
-            }
         }
     }
     return 1;
@@ -187,16 +215,16 @@ static inline __attribute__((always_inline)) void newton_factor_classical_rest(c
         for (int c=0; c<K; c++){
             hrow[c] = u->Q[k-1][1 + c];
         }
-        double out[8];
+        // (whole rows of C: the lanes c >= K are never read)
+        double identity[8] = {0., 0., 0., 0., 0., 0., 0., 0.};
+        identity[k-1] = 1.;
         for (int h=0; h<2; h++){
-            pfvi_lanes H;
+            pfvi_lanes H, I;
             memcpy(&H, hrow + 4*h, sizeof(H));
+            memcpy(&I, identity + 4*h, sizeof(I));
             const pfvi_lanes nn = ALL(n[k][0])*NX[h] + ALL(n[k][1])*NY[h] + ALL(n[k][2])*NZ[h];
-            const pfvi_lanes v = (D[h]*H)*nn;
-            memcpy(out + 4*h, &v, sizeof(v));
-        }
-        for (int c=0; c<K; c++){
-            u->C[k-1][c] = ((k == 1 + c) ? 1. : 0.) + out[c];
+            const pfvi_lanes v = I + (D[h]*H)*nn;
+            memcpy(&u->C[k-1][4*h], &v, sizeof(v));
         }
     }
 #undef ALL
@@ -506,6 +534,22 @@ static void centre_start(const struct centre_ref* c, const struct pfvi_state* st
     }
 }
 
+// centre_start's position alone (the same operations).
+static void centre_start_position(const struct centre_ref* c, const struct pfvi_state* st, double x[3]){
+    const struct reb_particle* const pp = &st->start[c->p];
+    const double px[3] = {pp->x, pp->y, pp->z};
+    for (int d=0; d<3; d++){
+        x[d] = px[d] + c->g[d];
+    }
+    if (c->q != SIZE_MAX){
+        const struct reb_particle* const pq = &st->start[c->q];
+        const double qx[3] = {pq->x, pq->y, pq->z};
+        for (int d=0; d<3; d++){
+            x[d] = (1. - c->w)*x[d] + c->w*(qx[d] + c->g[d] + c->gq[d]);
+        }
+    }
+}
+
 // The units of a step: each particle's kind, the pair its partner may be
 // in, and an order in which every body comes after what it is corrected
 // about (a cycle longer than a pair is cut where the chain closes: that
@@ -640,14 +684,40 @@ static void newton_correct_unit(struct pfvi_state* st, size_t i, const double (*
             }
         }
         newton_apply(f, u, b);
-        for (int l=0; l<m; l++){
-            for (int c=0; c<3; c++){
-                const double bi = yn[vi][l][c] - y[vi][l][c], bp = yn[vp][l][c] - y[vp][l][c];
-                // Tiny masses: as mass fractions (m*b underflows; PFVI_MASS_TINY).
-                const double cm = (M > PFVI_MASS_TINY) ? (mi*bi + mp*bp)/M : (mi/M)*bi + (mp/M)*bp;
-                yn[vi][l][c] = y[vi][l][c] + (cm + (mp/M)*b[l][c]);
-                yn[vp][l][c] = y[vp][l][c] + (cm - (mi/M)*b[l][c]);
+        // The rows' 3 m values are contiguous: four at a time in vector
+        // lanes, each lane the scalar expression below (the same bits),
+        // then the rest one by one.
+        double* const yni = &yn[vi][0][0];
+        double* const ynp = &yn[vp][0][0];
+        const double* const yi = &y[vi][0][0];
+        const double* const yp = &y[vp][0][0];
+        const double* const bb = &b[0][0];
+        const int n = 3*m;
+        int e = 0;
+        if (M > PFVI_MASS_TINY){
+#define ALL(x) ((pfvi_lanes){(x), (x), (x), (x)})
+            const pfvi_lanes MI = ALL(mi), MP = ALL(mp), MM = ALL(M), WP = ALL(mp/M), WI = ALL(mi/M);
+#undef ALL
+            for (; e + 4 <= n; e+=4){
+                pfvi_lanes a_i, a_p, x_i, x_p, B;
+                memcpy(&a_i, yni + e, sizeof(a_i));
+                memcpy(&a_p, ynp + e, sizeof(a_p));
+                memcpy(&x_i, yi + e, sizeof(x_i));
+                memcpy(&x_p, yp + e, sizeof(x_p));
+                memcpy(&B, bb + e, sizeof(B));
+                const pfvi_lanes bi = a_i - x_i, bp = a_p - x_p;
+                const pfvi_lanes cm = (MI*bi + MP*bp)/MM;
+                const pfvi_lanes ni = x_i + (cm + WP*B), np = x_p + (cm - WI*B);
+                memcpy(yni + e, &ni, sizeof(ni));
+                memcpy(ynp + e, &np, sizeof(np));
             }
+        }
+        for (; e<n; e++){
+            const double bi = yni[e] - yi[e], bp = ynp[e] - yp[e];
+            // Tiny masses: as mass fractions (m*b underflows; PFVI_MASS_TINY).
+            const double cm = (M > PFVI_MASS_TINY) ? (mi*bi + mp*bp)/M : (mi/M)*bi + (mp/M)*bp;
+            yni[e] = yi[e] + (cm + (mp/M)*bb[e]);
+            ynp[e] = yp[e] + (cm - (mi/M)*bb[e]);
         }
         return;
     }
@@ -711,6 +781,7 @@ void pfvi_newton_correct_variational(struct pfvi_state* st, size_t N){
 
 /* ------------------------------------------------ the rounds and their stop */
 
+PFVI_VECTOR_CLONES
 double pfvi_solve_change(const double (*y)[3], const double (*yn)[3], const double* q0, int increment, int s,
         double scale){
     double diff = 0.;
@@ -719,16 +790,48 @@ double pfvi_solve_change(const double (*y)[3], const double (*yn)[3], const doub
         scale = (q > scale) ? q : scale;
         scale = (d > scale) ? d : scale;
     }
-    // (the largest difference, and their sum only to carry a NaN through)
-    double any = 0.;
-    for (int j=0; j<s-1; j++){
-        for (int c=0; c<3; c++){
-            const double d = fabs(yn[j][c] - y[j][c]);
-            diff = (d > diff) ? d : diff;
-            any += d;
-        }
+    // The largest difference, four at a time (the rows' 3 (s - 1) values
+    // are contiguous): the largest of a set is the same in any order. A
+    // difference that is not a number is found beside it; then the scalar
+    // loop below gives the result (its sum carries that NaN through).
+    const double* const a = &y[0][0];
+    const double* const b = &yn[0][0];
+    const int n = 3*(s - 1);
+    const lane_mask magnitude = {INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX};
+    pfvi_lanes most = {0., 0., 0., 0.};
+    lane_mask nan = {0, 0, 0, 0};
+    int l = 0;
+    for (; l + 4 <= n; l+=4){
+        pfvi_lanes x, xn;
+        memcpy(&x, a + l, sizeof(x));
+        memcpy(&xn, b + l, sizeof(xn));
+        const pfvi_lanes d = (pfvi_lanes)((lane_mask)(xn - x) & magnitude);   // fabs: the sign bit cleared
+        most = lanes_where(d > most, d, most);
+        nan |= (d != d);
     }
-    diff = (any == any) ? diff : any;
+    double lanes[4];
+    memcpy(lanes, &most, sizeof(lanes));
+    int finite = ((nan[0] | nan[1]) | (nan[2] | nan[3])) == 0;
+    for (int k=0; k<4; k++){
+        diff = (lanes[k] > diff) ? lanes[k] : diff;
+    }
+    for (; l<n; l++){
+        const double d = fabs(b[l] - a[l]);
+        diff = (d > diff) ? d : diff;
+        finite &= (d == d);
+    }
+    if (!finite){
+        // (the largest difference, and their sum only to carry a NaN through)
+        double any = 0.;
+        for (int j=0; j<s-1; j++){
+            for (int c=0; c<3; c++){
+                const double d = fabs(yn[j][c] - y[j][c]);
+                diff = (d > diff) ? d : diff;
+                any += d;
+            }
+        }
+        diff = (any == any) ? diff : any;
+    }
     return (scale > 0.) ? diff/scale : diff;
 }
 
@@ -746,8 +849,8 @@ static void solve_scales(struct pfvi_state* st, size_t N, const struct pfvi_fiel
             continue;
         }
         const struct centre_ref c = centre_of(st, field, i);
-        double xc[3], vc[3], ac[3];
-        centre_start(&c, st, xc, vc, ac);
+        double xc[3];
+        centre_start_position(&c, st, xc);
         const struct reb_particle* const p = &st->start[i];
         const double r[3] = {fabs(p->x - xc[0]), fabs(p->y - xc[1]), fabs(p->z - xc[2])};
         const double largest = fmax(r[0], fmax(r[1], r[2]));
@@ -999,28 +1102,24 @@ static void kepler_pull(const double r[3], double mu, double softening2, double 
 // rest follows: out[k] = h^2 sum_j nu[k][j] w_j rest_j. Extrapolation and
 // integral are one matrix for all bodies of a step (rest_weights):
 //     out[k] = h^2 (start[k] rest_0 + sum_m last[k][m] rest_old_m).
-struct rest_weights {
-    int extrapolated;
-    double start[PFVI_STAGES_MAX];
-    double last_t[PFVI_STAGES_MAX][PFVI_STAGES_MAX];   // last[k][m] as last_t[m][k]: the stages k as lanes
-};
+// (struct pfvi_rest_weights, pfvi.h: kept in the state for the last step ratio)
 
 // The lanes k of last_t and start hold each sum in the scalar loop's order
 // (j, then m, ascending), so the vector loops give the scalar loops' bits.
 PFVI_VECTOR_CLONES
-static void rest_weights_of(const struct pfvi_lobatto* rule, const double (*basis)[PFVI_STAGES_MAX],
-        struct rest_weights* rw){
+static void rest_weights_of(const struct pfvi_lobatto* rule, const double (*basis_t)[PFVI_STAGES_MAX],
+        struct pfvi_rest_weights* rw){
     const int s = rule->s;
-    rw->extrapolated = (basis != NULL);
+    rw->extrapolated = (basis_t != NULL);
     memset(rw->start, 0, sizeof(rw->start));
     for (int k=1; k<s; k++){
         double start = rule->nu[k][0]*rule->w[0];
-        for (int j=1; !basis && j<s-1; j++){
+        for (int j=1; !basis_t && j<s-1; j++){
             start += rule->nu[k][j]*rule->w[j];
         }
         rw->start[k] = start;
     }
-    if (!basis){
+    if (!basis_t){
         return;
     }
     pfvi_lanes nuw[PFVI_STAGES_MAX][2];   // nu[k][j] w_j, lanes k
@@ -1034,7 +1133,7 @@ static void rest_weights_of(const struct pfvi_lobatto* rule, const double (*basi
     for (int m=0; m<PFVI_STAGES_MAX; m++){
         pfvi_lanes lo = {0., 0., 0., 0.}, hi = {0., 0., 0., 0.};
         for (int j=1; j<s-1; j++){
-            const double b = basis[j][m];
+            const double b = basis_t[m][j];
             const pfvi_lanes bb = {b, b, b, b};
             lo += nuw[j][0]*bb;
             hi += nuw[j][1]*bb;
@@ -1045,7 +1144,7 @@ static void rest_weights_of(const struct pfvi_lobatto* rule, const double (*basi
 }
 
 PFVI_VECTOR_CLONES
-static void rest_integral(const struct pfvi_state* st, const struct rest_weights* rw, double h,
+static void rest_integral(const struct pfvi_state* st, const struct pfvi_rest_weights* rw, double h,
         const double rest0[3], const double (*rest_old)[3], double (*out)[3]){
     const int s = st->rule.s;
     const double h2 = h*h;
@@ -1077,7 +1176,7 @@ static void rest_integral(const struct pfvi_state* st, const struct rest_weights
 // acceleration; a mutual pair's relative orbit about their barycentre; the
 // start's motion under its extrapolated acceleration without a partner.
 static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, size_t i, double h,
-        const struct rest_weights* rw){
+        const struct pfvi_rest_weights* rw){
     const int s = st->rule.s;
     const struct pfvi_newton* const u = &st->newton[i];
     if (u->kind == PFVI_NEWTON_MEMBER){
@@ -1199,18 +1298,61 @@ static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, 
     }
 }
 
+// basis_t[m][j] = l_m(1 + rho c^j), the last step's Lagrange basis at this
+// step's nodes, transposed (rows m < s; the others left as they are):
+// pfvi_lagrange_at for every j at once, the nodes j as vector lanes, each
+// lane its operations in its order (the same bits).
+PFVI_VECTOR_CLONES
+static void lagrange_basis(const struct pfvi_lobatto* rule, double rho, double (*basis_t)[PFVI_STAGES_MAX]){
+#define ALL(x) ((pfvi_lanes){(x), (x), (x), (x)})
+    const int s = rule->s;
+    double tau[PFVI_STAGES_MAX] = {1., 1., 1., 1., 1., 1., 1., 1.};
+    for (int j=0; j<s; j++){
+        tau[j] = 1. + rho*rule->c[j];
+    }
+    pfvi_lanes t_lo, t_hi;
+    memcpy(&t_lo, tau, sizeof(t_lo));
+    memcpy(&t_hi, tau + 4, sizeof(t_hi));
+    pfvi_lanes below_lo[PFVI_STAGES_MAX], below_hi[PFVI_STAGES_MAX];
+    below_lo[0] = ALL(1.);
+    below_hi[0] = ALL(1.);
+    for (int n=1; n<s; n++){
+        below_lo[n] = below_lo[n-1]*(t_lo - ALL(rule->c[n-1]));
+        below_hi[n] = below_hi[n-1]*(t_hi - ALL(rule->c[n-1]));
+    }
+    pfvi_lanes above_lo = ALL(1.), above_hi = ALL(1.);
+    for (int m=s-1; m>=0; m--){
+        const pfvi_lanes lo = ALL(rule->lagrange[m])*(below_lo[m]*above_lo);
+        const pfvi_lanes hi = ALL(rule->lagrange[m])*(below_hi[m]*above_hi);
+        memcpy(&basis_t[m][0], &lo, sizeof(lo));
+        memcpy(&basis_t[m][4], &hi, sizeof(hi));
+        above_lo *= t_lo - ALL(rule->c[m]);
+        above_hi *= t_hi - ALL(rule->c[m]);
+    }
+#undef ALL
+}
+
 void pfvi_solve_predict(struct pfvi_state* st, size_t N, const struct pfvi_field* field, double h, int extrapolate){
-    // The last step's stages, in units of its length, at this step's nodes.
-    double basis[PFVI_STAGES_MAX][PFVI_STAGES_MAX] = {{0.}};   // (rows zero beyond s: rest_weights_of reads full rows)
+    // The last step's stages, in units of its length, at this step's nodes:
+    // the same for the same s and step ratio, so made again only when either
+    // changed since the last extrapolated step (the same inputs, the same
+    // bits).
+    const struct pfvi_rest_weights* rw = &st->predict_weights;
+    struct pfvi_rest_weights start_only;
     if (extrapolate){
         const double rho = h/st->predictor_h;
-        for (int j=0; j<st->rule.s; j++){
-            pfvi_lagrange_at(&st->rule, 1. + rho*st->rule.c[j], basis[j]);
+        if (st->predict_weights_s != st->rule.s || memcmp(&rho, &st->predict_weights_rho, sizeof(rho)) != 0){
+            double basis_t[PFVI_STAGES_MAX][PFVI_STAGES_MAX] = {{0.}};   // (rows zero beyond s: rest_weights_of reads every m)
+            lagrange_basis(&st->rule, rho, basis_t);
+            rest_weights_of(&st->rule, (const double (*)[PFVI_STAGES_MAX])basis_t, &st->predict_weights);
+            st->predict_weights_s = st->rule.s;
+            st->predict_weights_rho = rho;
         }
+    }else{
+        rest_weights_of(&st->rule, NULL, &start_only);
+        rw = &start_only;
     }
-    struct rest_weights rw;
-    rest_weights_of(&st->rule, extrapolate ? (const double (*)[PFVI_STAGES_MAX])basis : NULL, &rw);
     for (size_t o=0; o<N; o++){
-        predict_body(st, field, st->newton_order[o], h, &rw);
+        predict_body(st, field, st->newton_order[o], h, rw);
     }
 }

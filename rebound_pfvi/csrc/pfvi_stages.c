@@ -232,12 +232,19 @@ static int stage_forces_own(struct reb_simulation* r, struct pfvi_state* st, siz
     for (size_t i=0; i<N; i++){
         const double (*y)[3] = (const double (*)[3])st->unknowns[i];
         if (st->stage_fit[i].classical && k_first >= 1){
-            // stage_position of the classical form, its branches taken once
+            // stage_position of the classical form, its branches taken once:
+            // the stages inside the step, then the end's if asked for.
             const double* const q0 = st->stage_start[i].q0;
             const double* const comp = st->compensation[i].x;
-            for (int k=k_first; k<=k_last; k++){
+            const int k_inside = (k_last < s - 1) ? k_last : s - 2;
+            for (int k=k_first; k<=k_inside; k++){
+                st->stage_x[i][k][0] = q0[0] + y[k-1][0];
+                st->stage_x[i][k][1] = q0[1] + y[k-1][1];
+                st->stage_x[i][k][2] = q0[2] + y[k-1][2];
+            }
+            if (k_last == s - 1){
                 for (int c=0; c<3; c++){
-                    st->stage_x[i][k][c] = (k == s - 1) ? q0[c] + (y[s-2][c] + comp[c]) : q0[c] + y[k-1][c];
+                    st->stage_x[i][s-1][c] = q0[c] + (y[s-2][c] + comp[c]);
                 }
             }
             continue;
@@ -246,15 +253,9 @@ static int stage_forces_own(struct reb_simulation* r, struct pfvi_state* st, siz
             stage_position(&st->stage_fit[i], &st->stage_start[i], &st->compensation[i], y, s, k, st->stage_x[i][k]);
         }
     }
-    pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a, k_first, k_last);
-    double sum = 0.;  // as in pfvi_update_acceleration: 0 unless a force is not finite
-    for (size_t i=0; i<N; i++){
-        for (int k=k_first; k<=k_last; k++){
-            sum += (st->stage_a[i][k][0] - st->stage_a[i][k][0]) + (st->stage_a[i][k][1] - st->stage_a[i][k][1])
-                + (st->stage_a[i][k][2] - st->stage_a[i][k][2]);
-        }
-    }
-    if (sum != 0.){
+    // (finite: pfvi_update_acceleration's check, made in the gravity's lanes)
+    if (!pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a,
+            k_first, k_last)){
         return 0;
     }
     st->statistics.n_force_evaluations += (uint64_t)(k_last - k_first + 1);
@@ -360,8 +361,11 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
 // from the two-body predictor of pfvi_solve.c, which extrapolates only the
 // forces beyond each body's partner, from the last step's stages).
 // With tangent_only (a classical step whose first iterate the two-body
-// predictor draws) the stages beyond the start are only placeholders until
-// the first forces: the tangent path then, and no polynomial is evaluated.
+// predictor draws) the stages beyond the start would be only placeholders,
+// overwritten unread: stages 1 .. s-2 by the solve's first forces, the end
+// by the converged step's (the classical round does not read it; a solve
+// that fails leaves no retry): only the start is written, and no
+// polynomial is evaluated.
 static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h, int tangent_only){
     const struct pfvi_lobatto* const rule = &st->rule;
     const int s = rule->s;
@@ -385,10 +389,11 @@ static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h, i
         }
     }
     const struct reb_particle* const p0 = st->start;
+    const int k_end = (tangent_only && !retry) ? 1 : s;   // stages written
     for (size_t i=0; i<N; i++){
         // A retry reads the values it overwrites: this particle's, copied first.
         double source[PFVI_STAGES_MAX][3], source_x[PFVI_STAGES_MAX][3];
-        for (int m=0; m<s; m++){
+        for (int m=0; polynomial && m<s; m++){
             for (int c=0; c<3; c++){
                 source[m][c] = retry ? st->stage_a[i][m][c] : (extrapolate ? st->predictor_a[i][m][c] : 0.);
                 source_x[m][c] = retry ? st->stage_x[i][m][c] : (extrapolate ? st->predictor_x[i][m][c] : 0.);
@@ -396,7 +401,7 @@ static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h, i
         }
         const double q0[3] = {p0[i].x, p0[i].y, p0[i].z};
         const double v0[3] = {p0[i].vx, p0[i].vy, p0[i].vz};
-        for (int k=0; k<s; k++){
+        for (int k=0; k<k_end; k++){
             for (int c=0; c<3; c++){
                 if (k == 0 || !polynomial){
                     // The start acceleration, at the start position moved along its tangent.
@@ -513,17 +518,27 @@ static int stages_prepare(struct pfvi_state* st, double h){
         st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_UNDERFLOW, .h = h, .n = (size_t)st->rule.s};
         return 0;
     }
-    classical_form(&st->rule, h, &st->solve_form_classical);
+    if (st->solve_form_classical_s != st->rule.s || memcmp(&st->solve_form_classical_h, &h, sizeof(h)) != 0){
+        classical_form(&st->rule, h, &st->solve_form_classical);
+        st->solve_form_classical_s = st->rule.s;
+        st->solve_form_classical_h = h;
+    }
     return 1;
 }
 
 static enum pfvi_fit_status stages_fit(struct pfvi_state* st, size_t i, double omega, double h){
+    const int s = st->rule.s;
     if (omega == 0.){
-        // u = 0: the classical coefficients, the same at every step.
-        st->stage_fit[i] = st->stage_classical;
+        // u = 0: the classical coefficients, the same at every step (copied
+        // only if this particle's fit is not already them).
+        if (st->stage_fit_classical[i] != s){
+            st->stage_fit[i] = st->stage_classical;
+            st->stage_fit_classical[i] = (unsigned char)s;
+        }
         st->solve_form[i] = &st->solve_form_classical;
         return PFVI_FIT_OK;
     }
+    st->stage_fit_classical[i] = 0;
     const enum pfvi_fit_status status = pfvi_stage_fit(&st->rule, omega, h, st->options.u_max, st->options.fitting,
             &st->stage_fit[i]);
     if (st->stage_fit[i].classical){
@@ -536,7 +551,11 @@ static enum pfvi_fit_status stages_fit(struct pfvi_state* st, size_t i, double o
 }
 
 static void stages_copy_fit(struct pfvi_state* st, size_t i, size_t from){
-    st->stage_fit[i] = st->stage_fit[from];
+    // (not again if both are the same classical fit already)
+    if (st->stage_fit_classical[from] == 0 || st->stage_fit_classical[i] != st->stage_fit_classical[from]){
+        st->stage_fit[i] = st->stage_fit[from];
+        st->stage_fit_classical[i] = st->stage_fit_classical[from];
+    }
     st->solve_form[i] = st->solve_form[from];
 }
 

@@ -27,6 +27,8 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->dv);
     free(st->compensation);
     free(st->stage_fit);
+    free(st->stage_fit_classical);
+    free(st->field_blocks);
     free(st->stage_a);
     free(st->predictor_a);
     free(st->stage_x);
@@ -113,6 +115,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->dx = pfvi_grow(st->dx, N*sizeof(*st->dx), &ok);
     st->dv = pfvi_grow(st->dv, N*sizeof(*st->dv), &ok);
     st->stage_fit = pfvi_grow(st->stage_fit, N*sizeof(*st->stage_fit), &ok);
+    st->stage_fit_classical = pfvi_grow(st->stage_fit_classical, N*sizeof(*st->stage_fit_classical), &ok);
     st->stage_a = pfvi_grow(st->stage_a, N*sizeof(*st->stage_a), &ok);
     st->predictor_a = pfvi_grow(st->predictor_a, N*sizeof(*st->predictor_a), &ok);
     st->stage_x = pfvi_grow(st->stage_x, N*sizeof(*st->stage_x), &ok);
@@ -151,6 +154,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
         st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_MEMORY, .n = N};
         return 0;
     }
+    memset(st->stage_fit_classical, 0, N*sizeof(*st->stage_fit_classical));   // (what the fits hold is not known)
     st->N_allocated = N;
     return 1;
 }
@@ -452,12 +456,23 @@ int pfvi_field_of(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_f
         st->images_allocated = n;
     }
     pfvi_ghost_boxes(r, st->images);
+    if (r->N > st->field_blocks_N){
+        // (grown with N only; without it the scans gather as they go)
+        const size_t n_blocks = (r->N + 3)/4;
+        struct pfvi_lanes_block* const blocks = realloc(st->field_blocks, n_blocks*sizeof(*blocks));
+        if (blocks){
+            st->field_blocks = blocks;
+            st->field_blocks_N = 4*n_blocks;
+        }
+    }
     *f = (struct pfvi_field){
         .G = (r->gravity == REB_GRAVITY_NONE) ? 0. : r->G,
         .softening2 = r->softening*r->softening,
         .N_active = r->N_active,
         .n_images = n,
         .images = st->images,
+        .blocks = st->field_blocks,
+        .blocks_N = st->field_blocks_N,
     };
     return 1;
 }

@@ -69,6 +69,36 @@ static inline __attribute__((always_inline)) void block_of(const struct reb_part
     memcpy(&b->m, v[6], sizeof(b->m));
 }
 
+// The particles j0 .. j0 + 3 (j0 a multiple of 4) from the field's blocks
+// where pfvi_partner_search filled them, else gathered (the lanes beyond
+// n, which no caller reads, differ between the two).
+static inline __attribute__((always_inline)) void block_at(const struct pfvi_field* f, const struct reb_particle* p,
+        size_t N, size_t j0, size_t n, struct lanes_block* b){
+    if (!f->blocks || N > f->blocks_N){
+        block_of(p, j0, n, b);
+        return;
+    }
+    const struct pfvi_lanes_block* const k = &f->blocks[j0/4];
+    memcpy(&b->x, k->x, sizeof(b->x)); memcpy(&b->y, k->y, sizeof(b->y)); memcpy(&b->z, k->z, sizeof(b->z));
+    memcpy(&b->vx, k->vx, sizeof(b->vx)); memcpy(&b->vy, k->vy, sizeof(b->vy)); memcpy(&b->vz, k->vz, sizeof(b->vz));
+    memcpy(&b->m, k->m, sizeof(b->m));
+}
+
+// Fills the field's blocks with the particles p (once per scan: O(N)).
+static void blocks_fill(const struct pfvi_field* f, const struct reb_particle* p, size_t N){
+    if (!f->blocks || N > f->blocks_N){
+        return;
+    }
+    for (size_t j0=0; j0<N; j0+=4){
+        struct pfvi_lanes_block* const k = &f->blocks[j0/4];
+        for (size_t l=0; l<4; l++){
+            const struct reb_particle* const q = &p[(j0 + l < N) ? j0 + l : j0];
+            k->x[l] = q->x; k->y[l] = q->y; k->z[l] = q->z;
+            k->vx[l] = q->vx; k->vy[l] = q->vy; k->vz[l] = q->vz; k->m[l] = q->m;
+        }
+    }
+}
+
 #define lanes_of(x) ((pfvi_lanes){(x), (x), (x), (x)})
 
 // Without ghost boxes: the pairs' stiffnesses four at a time in vector lanes
@@ -84,7 +114,7 @@ static inline __attribute__((always_inline)) void partner_search_lanes(const str
         for (size_t j0=0; j0<before; j0+=4){
             const size_t n = (before - j0 < 4) ? before - j0 : 4;
             struct lanes_block b;
-            block_of(p, j0, n, &b);
+            block_at(f, p, N, j0, n, &b);
             const pfvi_lanes dx = (b.x + sx) - xi, dy = (b.y + sy) - yi, dz = (b.z + sz) - zi;
             const pfvi_lanes r2 = (dx*dx + dy*dy + dz*dz) + soft;
             pfvi_lanes root;
@@ -121,6 +151,7 @@ void pfvi_partner_search(const struct reb_particle* p, size_t N, const struct pf
     }
     const size_t n_images = f->n_images;
     if (n_images == 1){
+        blocks_fill(f, p, N);
         partner_search_lanes(p, N, f, n_attracting, out);
         return;
     }
@@ -510,10 +541,10 @@ static void encounter_term(const double d[3], const double w[3], const double b[
 // before its first effect. The sum's largest term only grows within a scan,
 // so a pair failing at this `negligible` fails at the later one too; the
 // pairs passing are tested again by encounter_term itself.
-static inline __attribute__((always_inline)) void encounter_prefilter(const struct reb_particle* p, size_t i,
+static inline __attribute__((always_inline)) void encounter_prefilter(const struct reb_particle* p, size_t N, size_t i,
         size_t j0, size_t n, const struct pfvi_field* f, double negligible, int pass[4]){
     struct lanes_block b;
-    block_of(p, j0, (n < 4) ? n : 4, &b);
+    block_at(f, p, N, j0, (n < 4) ? n : 4, &b);
     const struct reb_vec6d* const sh = &f->images[0];
     const pfvi_lanes d0 = (b.x + lanes_of(sh->x)) - lanes_of(p[i].x), d1 = (b.y + lanes_of(sh->y)) - lanes_of(p[i].y),
         d2 = (b.z + lanes_of(sh->z)) - lanes_of(p[i].z);
@@ -584,7 +615,7 @@ int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state*
             int pass[4] = {1, 1, 1, 1};
             for (size_t j=0; j<before; j++){
                 if (lanes && j % 4 == 0){
-                    encounter_prefilter(p, i, j, before - j, f, PFVI_DENSITY_NEGLIGIBLE*sum.largest, pass);
+                    encounter_prefilter(p, N, i, j, before - j, f, PFVI_DENSITY_NEGLIGIBLE*sum.largest, pass);
                 }
                 if (!(i_attracts || p[j].m > 0.) || !pass[j % 4]){
                     continue;
