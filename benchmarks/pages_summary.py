@@ -16,7 +16,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Dict, List, Tuple
+from typing import Dict, Iterator, List, Tuple
 
 from rebound_pfvi import report
 from rebound_pfvi.runs import Run
@@ -38,17 +38,23 @@ PAGES = {"kepler-e0.5": "Kepler e = 0.5", "kepler-e0.9": "Kepler e = 0.9", "kepl
 NO_GRAVITY = ("oscillator",)
 
 
+def page_rows(folder: Path) -> Iterator[Tuple[str, str, List[Run]]]:
+    """(slug, name, runs) of each page of PAGES that folder holds, in PAGES' order."""
+    for slug, name in PAGES.items():
+        path = folder / f"{slug}.json"
+        if path.exists():
+            yield slug, name, [Run.from_dict(r) for r in json.loads(path.read_text())["rows"]]
+
+
 def ias15_ratio_range(folder: Path) -> Tuple[float, float]:
     """(least, largest) ratio of pfvi's defaults' wall time to IAS15's, at
     each of TARGETS that both reach, over the pages with gravity: the range
     README.md, docs/results.md and rebound_pfvi.demo state (tests/test_docs.py
     checks them against this)."""
     ratios = []
-    for slug in PAGES:
-        path = folder / f"{slug}.json"
-        if slug in NO_GRAVITY or not path.exists():
+    for slug, _, rows in page_rows(folder):
+        if slug in NO_GRAVITY:
             continue
-        rows = [Run.from_dict(r) for r in json.loads(path.read_text())["rows"]]
         for target in TARGETS:
             best = report.fastest(rows, target)
             if DEFAULT_LINE in best and "IAS15" in best:
@@ -67,11 +73,7 @@ def main() -> None:
     lines = ["| page | error | pfvi defaults / IAS15 (wall time) | fastest, and lines tied with it |",
              "|---|---|---|---|"]
     wins: Dict[str, List[str]] = {}
-    for slug, name in PAGES.items():
-        path = folder / f"{slug}.json"
-        if not path.exists():
-            continue
-        rows = [Run.from_dict(r) for r in json.loads(path.read_text())["rows"]]
+    for slug, name, rows in page_rows(folder):
         for target in TARGETS:
             best = report.fastest(rows, target)
             if not best:
@@ -110,11 +112,7 @@ def against_the_rest(folder: Path) -> List[str]:
     and (1e-6 AU) pfvi's defaults over WHFast with its corrector."""
     lines = ["| page | error | fastest pfvi line | fastest other line | ratio | pfvi defaults / WHFast corrector |",
              "|---|---|---|---|---|---|"]
-    for slug, name in PAGES.items():
-        path = folder / f"{slug}.json"
-        if not path.exists():
-            continue
-        rows = [Run.from_dict(r) for r in json.loads(path.read_text())["rows"]]
+    for slug, name, rows in page_rows(folder):
         for target in TARGETS:
             best = report.fastest(rows, target)
             pfvi = min((r for r in best.values() if r.family == "pfvi"), key=lambda r: r.wall_s, default=None)
