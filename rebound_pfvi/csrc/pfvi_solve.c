@@ -451,25 +451,58 @@ static void newton_apply(const struct pfvi_solve_form* f, const struct pfvi_newt
 }
 
 // Adds to b the partner's correction as it acts on this body:
-// S [fscale J_k dx_p,k]_k, dx_p the partner's stage displacements.
-static void newton_cross(const struct pfvi_solve_form* f, const struct pfvi_newton* u,
-        const struct pfvi_solve_form* fp, const double (*Dp)[3], double (*b)[3]){
-    for (int k=1; k<=f->k_last; k++){
-        double dx[3] = {0., 0., 0.}, J[3];
+// S [fscale J_k dx_p,k]_k, dx_p the partner's stage displacements. Each row
+// of b (and of dx) is one vector of lanes (x, y, z, 0), every lane the
+// scalar expression for its component: the bits of the loop over
+// components. (m, K: f's rows and forced stages; constants where the
+// compiler should unroll, as in newton_apply_classical_n.)
+static inline __attribute__((always_inline)) void newton_cross_n(const struct pfvi_solve_form* f,
+        const struct pfvi_newton* u, const struct pfvi_solve_form* fp, const double (*Dp)[3], double (*b)[3],
+        const int m, const int K){
+#define ROW(x, y, z) ((pfvi_lanes){(x), (y), (z), (z)})   // (the fourth lane is never stored)
+#define ALL(x) ((pfvi_lanes){(x), (x), (x), (x)})
+    pfvi_lanes B[PFVI_STAGES_MAX];
+    for (int l=0; l<m; l++){
+        B[l] = ROW(b[l][0], b[l][1], b[l][2]);
+    }
+    for (int k=1; k<=K; k++){
+        pfvi_lanes dx = {0., 0., 0., 0.};
         if (fp->classical){
-            dx[0] = Dp[k-1][0]; dx[1] = Dp[k-1][1]; dx[2] = Dp[k-1][2];
+            dx = ROW(Dp[k-1][0], Dp[k-1][1], Dp[k-1][2]);
         }else{
             for (int l=0; l<fp->m; l++){
-                const double X = fp->X[k][l];
-                dx[0] += X*Dp[l][0]; dx[1] += X*Dp[l][1]; dx[2] += X*Dp[l][2];
+                dx += ALL(fp->X[k][l])*ROW(Dp[l][0], Dp[l][1], Dp[l][2]);
             }
         }
-        tidal_apply(u, k, u->gc[k], dx, J);
-        for (int l=0; l<f->m; l++){
-            const double S = f->S[l][k];
-            b[l][0] += S*J[0]; b[l][1] += S*J[1]; b[l][2] += S*J[2];
+        // tidal_apply: J dx = g dx + d n (n . dx)
+        const double nd = u->d[k]*(u->n[k][0]*dx[0] + u->n[k][1]*dx[1] + u->n[k][2]*dx[2]);
+        const pfvi_lanes J = ALL(u->gc[k])*dx + ALL(nd)*ROW(u->n[k][0], u->n[k][1], u->n[k][2]);
+        for (int l=0; l<m; l++){
+            B[l] += ALL(f->S[l][k])*J;
         }
     }
+    for (int l=0; l<m; l++){
+        b[l][0] = B[l][0]; b[l][1] = B[l][1]; b[l][2] = B[l][2];
+    }
+#undef ROW
+#undef ALL
+}
+
+PFVI_VECTOR_CLONES
+static void newton_cross(const struct pfvi_solve_form* f, const struct pfvi_newton* u,
+        const struct pfvi_solve_form* fp, const double (*Dp)[3], double (*b)[3]){
+    if (f->classical && f->k_last == f->m - 1){
+        switch (f->m + 1){
+            case 3: newton_cross_n(f, u, fp, Dp, b, 2, 1); return;
+            case 4: newton_cross_n(f, u, fp, Dp, b, 3, 2); return;
+            case 5: newton_cross_n(f, u, fp, Dp, b, 4, 3); return;
+            case 6: newton_cross_n(f, u, fp, Dp, b, 5, 4); return;
+            case 7: newton_cross_n(f, u, fp, Dp, b, 6, 5); return;
+            case 8: newton_cross_n(f, u, fp, Dp, b, 7, 6); return;
+            default: break;
+        }
+    }
+    newton_cross_n(f, u, fp, Dp, b, f->m, f->k_last);
 }
 
 // What body i is corrected and predicted about: its partner p, or, where
