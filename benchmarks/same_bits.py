@@ -1,7 +1,8 @@
 """Whether this build and another (--baseline) give the same bits: a set of
 runs as users make them (pages' scenes, flybys, retrograde crossings,
-binaries with planets, test particles of both types, softening, every s and
-fitting, outputs, a reversal, contacts, MEGNO), each run by both builds in
+binaries with planets, test particles of both types, softening, the
+two-point and s-point schemes with every fitting, the seed and reversible
+step controls, outputs, a reversal, contacts, MEGNO), each run by both builds in
 child processes; prints each run's verdict (same bits, or the largest
 coordinate difference) and the count.
 
@@ -65,9 +66,12 @@ elif name == "softened":
     planets(sim)
     times = [20.0]
 elif name.startswith("stages"):
-    s, fitting = name[6:].split("-")
+    s, fitting = name[6:].split("-", 1)
     planets(sim)
     times = [15.0]
+elif name.endswith("-control"):
+    planets(sim)
+    times = [6.0]
 elif name == "outputs":
     planets(sim)
     times = [0.37 * k for k in range(1, 80)]
@@ -89,6 +93,8 @@ sim.integrator = "pfvi"
 if name.startswith("stages"):
     sim.integrator.stages = int(s)
     sim.integrator.fitting = fitting
+if name.endswith("-control"):
+    sim.integrator.step_control = name.split("-")[0]
 for t in times:
     if t is None:
         continue
@@ -110,6 +116,8 @@ RUNS = (["scene:" + s for s in ("kepler", "comet", "triple", "jupiter-comet", "r
         + [f"retrograde-i{i}" for i in (0.0, 1.2, 1.9, 2.6, 3.14159)]
         + ["flyby", "binary-planet", "testparticles-type0", "testparticles-type1", "softened"]
         + [f"stages{s}-{f}" for s in (3, 4, 6, 8) for f in ("none", "phase", "exact")]
+        + [f"stages2-{f}" for f in ("none", "phase", "exact", "phase-literal")]   # the two-point scheme
+        + ["stages5-phase-literal", "stages7-none", "seed-control", "reversible-control"]
         + ["outputs", "reversal", "contacts", "megno"])
 
 

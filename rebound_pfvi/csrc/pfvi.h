@@ -34,8 +34,10 @@
 // the stages written with them run in vector registers on any processor
 // (two SSE2 halves, or one AVX2 register in a target clone). Each lane is
 // the scalar operation on its own, rounded alike: the same bits either way.
+// (PFVI_NO_CLONES builds the baseline path alone, without the AVX2 clones:
+// tests/test_vector_paths.py compares the two builds' trajectories.)
 typedef double pfvi_lanes __attribute__((vector_size(4*sizeof(double))));
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) && !defined(PFVI_NO_CLONES)
 #define PFVI_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
 #else
 #define PFVI_VECTOR_CLONES
