@@ -475,15 +475,27 @@ static int encounter_weight(const struct encounter_pair* q, const double d[3], c
         }
     }
     const double R = R_i + R_j + Q;
-    // A weight below `least` (the term would be negligible): no pow().
+    if (!(R > 0.)){
+        return 0;
+    }
+    // A weight below `least` (the term would be negligible): no pow(). The
+    // floor least^order is the product least*least*... in that order; with
+    // 0 <= least <= 1 no partial product is below the last, so once one is
+    // at or below x, the last is too and x passes: the product stops there
+    // (the same decision as the whole product's).
+    const double x = R/(1. + R);
+    const int shrinking = (least >= 0. && least <= 1.);
     double floor = 1.;
     for (int k=0; k<q->order; k++){
         floor *= least;
+        if (shrinking && floor <= x){
+            break;
+        }
     }
-    if (!(R > 0.) || R/(1. + R) < floor){
+    if (x < floor){
         return 0;
     }
-    *weight = pow(R/(1. + R), q->exponent);
+    *weight = pow(x, q->exponent);
     *dlog = q->exponent*(R_i*dlog_i + R_j*dlog_j + dQ)/(R*(1. + R));
     return isfinite(*weight) && isfinite(*dlog);
 }
