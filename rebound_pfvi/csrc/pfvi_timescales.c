@@ -545,36 +545,6 @@ static void encounter_term(const double d[3], const double w[3], const double b[
     }
 }
 
-#define PFVI_PREFILTER_N_MIN 32
-
-// encounter_term's two early tests (bound; below `negligible`) for the
-// pairs (i, j0 .. j0 + 3) without ghost boxes, in vector lanes, each lane
-// the scalar expressions: pass[l] = 0 where encounter_term would return
-// before its first effect. The sum's largest term only grows within a scan,
-// so a pair failing at this `negligible` fails at the later one too; the
-// pairs passing are tested again by encounter_term itself.
-static inline __attribute__((always_inline)) void encounter_prefilter(const struct reb_particle* p, size_t N, size_t i,
-        size_t j0, size_t n, const struct pfvi_field* f, double negligible, int pass[4]){
-    struct lanes_block b;
-    block_at(f, p, N, j0, (n < 4) ? n : 4, &b);
-    const struct reb_vec6d* const sh = &f->images[0];
-    const pfvi_lanes d0 = (b.x + lanes_of(sh->x)) - lanes_of(p[i].x), d1 = (b.y + lanes_of(sh->y)) - lanes_of(p[i].y),
-        d2 = (b.z + lanes_of(sh->z)) - lanes_of(p[i].z);
-    const pfvi_lanes w0 = (b.vx + lanes_of(sh->vx)) - lanes_of(p[i].vx),
-        w1 = (b.vy + lanes_of(sh->vy)) - lanes_of(p[i].vy), w2 = (b.vz + lanes_of(sh->vz)) - lanes_of(p[i].vz);
-    const pfvi_lanes mu = lanes_of(f->G)*(lanes_of(p[i].m) + b.m);
-    const pfvi_lanes rs2 = (d0*d0 + d1*d1 + d2*d2) + lanes_of(f->softening2);
-    const pfvi_lanes v2 = w0*w0 + w1*w1 + w2*w2;
-    const pfvi_lanes bound_lhs = v2*v2*rs2, bound_rhs = lanes_of(4.)*mu*mu;
-    const pfvi_lanes P = d0*w0 + d1*w1 + d2*w2;
-    const pfvi_lanes C = P*P/(v2*rs2);
-    const pfvi_lanes boost = lanes_of(1.) + lanes_of(PFVI_ENCOUNTER_APPROACH)*C;
-    const pfvi_lanes near_lhs = v2*boost*boost, near_rhs = lanes_of(negligible)*lanes_of(negligible)*rs2;
-    for (int l=0; l<4; l++){
-        pass[l] = (bound_lhs[l] > bound_rhs[l]) && (near_lhs[l] > near_rhs[l]);
-    }
-}
-
 // encounter_term and encounter_weight for the pairs (i, j0 .. j0 + n - 1)
 // without ghost boxes, their arithmetic four pairs at a time in vector lanes
 // (each lane the scalar expressions, in their order: the same bits), and
@@ -764,11 +734,10 @@ int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state*
             partner_pulls(p, N, f, partners);
         }
         const size_t n_attracting = (f->N_active < N) ? f->N_active : N;
-        // (It pays where most pairs are negligible: in large systems. In a few
-        // bodies most pass, and the test would only be made twice.)
-        const int lanes = (f->n_images == 1 && N >= PFVI_PREFILTER_N_MIN);
         const struct encounter_scan scan = {p, start, N, f, partners, exponent, 2*s - 2};
-        // (Without ghost boxes the blocks hold p: pfvi_partner_search filled them.)
+        // Without ghost boxes four pairs at a time (the blocks hold p:
+        // pfvi_partner_search filled them); with them pair by pair, each
+        // image a pair.
         for (size_t i=0; i<N; i++){
             const int i_attracts = attracts(p, i, n_attracting);
             const size_t before = (i < n_attracting) ? i : n_attracting;
@@ -779,12 +748,8 @@ int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state*
                 continue;
             }
             const double* const ai = acceleration_of(p, start, i);
-            int pass[4] = {1, 1, 1, 1};
             for (size_t j=0; j<before; j++){
-                if (lanes && j % 4 == 0){
-                    encounter_prefilter(p, N, i, j, before - j, f, PFVI_DENSITY_NEGLIGIBLE*sum.largest, pass);
-                }
-                if (!(i_attracts || p[j].m > 0.) || !pass[j % 4]){
+                if (!(i_attracts || p[j].m > 0.)){
                     continue;
                 }
                 const double* const aj = acceleration_of(p, start, j);
