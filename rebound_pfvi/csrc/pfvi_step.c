@@ -133,12 +133,16 @@ void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* st, size_t N,
 // partner. Only for the symmetric control, which refreshed st->partners for
 // this step. The stages are measured once (weak_pull_of) and the ratio
 // taken for each pull2 asked (a second one when the largest pull is
-// measured), so the stage loop runs once per particle.
+// measured), so the stage loop runs once per particle; the same loop gives
+// the particle's net resolution against its stage accelerations
+// (pfvi_stage_resolution(a, a, weights, s, 0)), which it would otherwise
+// make again.
 struct weak_pull {
-    int any;            // 0: no massive partner, the ratio is 0
+    int any;            // 0: no massive partner, the ratio is 0 (and net not measured)
     double A2;          // the largest stage acceleration's square
     double F2;          // the largest rest's (the pulls beyond the partner's) square
     double D[3];        // sum_k w_k rest_k (pfvi_stage_resolution's D of the rest)
+    double net;         // pfvi_stage_resolution(a, a, weights, s, 0.)
 };
 
 // Component c of the stages k[0 .. 3] as lanes. (Always inlined, so the
@@ -156,13 +160,14 @@ static inline __attribute__((always_inline)) pfvi_lanes stage_lanes(const double
 // first stage (finite values): the largest squares are kept lane by lane
 // (a repeated stage changes no maximum, nor does the order: the squares are
 // never -0, and a NaN is passed over either way), and D's sums are taken
-// over the stages in order, as pfvi_stage_resolution took them.
+// over the stages in order, as pfvi_stage_resolution takes them (D of the
+// rest and of a).
 PFVI_VECTOR_CLONES
 static void weak_pull_stages(const double (*xi)[3], const double (*xj)[3], const double (*a)[3], int s,
         const double shift[3], double Gm, double softening2, const double* weights, struct weak_pull* out){
     typedef long long lanes_mask __attribute__((vector_size(4*sizeof(long long))));
     pfvi_lanes A2 = {0., 0., 0., 0.}, F2 = {0., 0., 0., 0.};
-    double D[3] = {0., 0., 0.};
+    double D[3] = {0., 0., 0.}, Da[3] = {0., 0., 0.};
     for (int k0=0; k0<s; k0+=4){
         const int n = (s - k0 < 4) ? s - k0 : 4;
         const int k1 = (n > 1) ? k0 + 1 : k0, k2 = (n > 2) ? k0 + 2 : k0, k3 = (n > 3) ? k0 + 3 : k0;
@@ -189,12 +194,14 @@ static void weak_pull_stages(const double (*xi)[3], const double (*xj)[3], const
         F2 = (pfvi_lanes)((mf & (lanes_mask)f2) | (~mf & (lanes_mask)F2));
         const pfvi_lanes w = {weights[k0], weights[k1], weights[k2], weights[k3]};
         for (int c=0; c<3; c++){
-            const pfvi_lanes p = w*rest[c];
+            const pfvi_lanes p = w*rest[c], pa = w*al[c];
             if (n == 4){
                 D[c] = (((D[c] + p[0]) + p[1]) + p[2]) + p[3];
+                Da[c] = (((Da[c] + pa[0]) + pa[1]) + pa[2]) + pa[3];
             }else{
                 for (int l=0; l<n; l++){
                     D[c] += p[l];
+                    Da[c] += pa[l];
                 }
             }
         }
@@ -209,11 +216,12 @@ static void weak_pull_stages(const double (*xi)[3], const double (*xj)[3], const
     for (int c=0; c<3; c++){
         out->D[c] = D[c];
     }
+    out->net = (A2_max > 0.) ? sqrt((Da[0]*Da[0] + Da[1]*Da[1] + Da[2]*Da[2])/A2_max) : 0.;
 }
 
 static struct weak_pull weak_pull_of(const struct reb_simulation* r, const struct pfvi_state* st, size_t N, size_t i,
         const struct pfvi_field* field, const double* weights, const double (*a)[3]){
-    struct weak_pull w = {0, 0., 0., {0., 0., 0.}};
+    struct weak_pull w = {0, 0., 0., {0., 0., 0.}, 0.};
     const struct pfvi_partner* const q = &st->partners[i];
     if (q->j >= N || q->j == i || q->image >= field->n_images || !(r->particles[q->j].m > 0.) || !(field->G > 0.)){
         return w;
@@ -280,7 +288,11 @@ struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, con
             }
         }
         const double (*const values)[3] = (omega != 0.) ? (const double (*)[3])f : (const double (*)[3])a;
-        double ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, 0.);
+        // (The weak-pull check's stage loop measures the net resolution too.)
+        const int weak_check = field && !residual && omega == 0. && st->partners;
+        const struct weak_pull w = weak_check ? weak_pull_of(r, st, N, i, field, weights, (const double (*)[3])a)
+            : (struct weak_pull){0, 0., 0., {0., 0., 0.}, 0.};
+        double ratio = w.any ? w.net : pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, 0.);
         double pull2 = -1.;    // the largest pull's square, once measured
         if (field && ratio > pull_above){
             // Unresolved against its net acceleration: measured against the
@@ -290,8 +302,7 @@ struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, con
             pull2 = fmax(pull0, pull1);
             ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, pull2);
         }
-        if (field && !residual && omega == 0. && st->partners){
-            const struct weak_pull w = weak_pull_of(r, st, N, i, field, weights, (const double (*)[3])a);
+        if (weak_check){
             const double weak = weak_pull_ratio(&w, pull2);
             if (weak > ratio && field && weak > pull_above && pull2 < 0.){
                 // Measured against the largest pull too, as above.
