@@ -127,49 +127,131 @@ void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* st, size_t N,
 // size F times (h/tau)^(2s - 2), while its share of the stages' leading
 // coefficient D_p is F (h/tau)^(s - 1)/(s - 1)!: measured against the net
 // acceleration alone (|D_p|/A) it reads sqrt(F/A) times too fine. Returned
-// as |D_p|/sqrt(A F), the ratio a Kepler pull of the same error shows
-// (A: the largest stage acceleration, or the largest pull if pull2 >= 0),
-// times sqrt(PFVI_WEAK_PULL_MARGIN); 0 without a massive partner. Only for
-// the symmetric control, which refreshed st->partners for this step.
-static double pfvi_weak_pull_resolution(const struct reb_simulation* r, const struct pfvi_state* st, size_t N, size_t i,
-        const struct pfvi_field* field, const double* weights, const double (*a)[3], double pull2){
+// (weak_pull_ratio) as |D_p|/sqrt(A F), the ratio a Kepler pull of the same
+// error shows (A: the largest stage acceleration, or the largest pull if
+// pull2 >= 0), times sqrt(PFVI_WEAK_PULL_MARGIN); 0 without a massive
+// partner. Only for the symmetric control, which refreshed st->partners for
+// this step. The stages are measured once (weak_pull_of) and the ratio
+// taken for each pull2 asked (a second one when the largest pull is
+// measured), so the stage loop runs once per particle; the same loop gives
+// the particle's net resolution against its stage accelerations
+// (pfvi_stage_resolution(a, a, weights, s, 0)), which it would otherwise
+// make again.
+struct weak_pull {
+    int any;            // 0: no massive partner, the ratio is 0 (and net not measured)
+    double A2;          // the largest stage acceleration's square
+    double F2;          // the largest rest's (the pulls beyond the partner's) square
+    double D[3];        // sum_k w_k rest_k (pfvi_stage_resolution's D of the rest)
+    double net;         // pfvi_stage_resolution(a, a, weights, s, 0.)
+};
+
+// Component c of the stages k[0 .. 3] as lanes. (Always inlined, so the
+// vector return's ABI, which differs with and without AVX, never applies;
+// GCC warns of it at the file's end, hence the pragma for the file.)
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+static inline __attribute__((always_inline)) pfvi_lanes stage_lanes(const double (*x)[3], const int k[4], int c){
+    return (pfvi_lanes){x[k[0]][c], x[k[1]][c], x[k[2]][c], x[k[3]][c]};
+}
+
+// The stage loop of weak_pull_of with four stages as vector lanes, each lane
+// the scalar expressions (the same bits). Lanes past s repeat the block's
+// first stage (finite values): the largest squares are kept lane by lane
+// (a repeated stage changes no maximum, nor does the order: the squares are
+// never -0, and a NaN is passed over either way), and D's sums are taken
+// over the stages in order, as pfvi_stage_resolution takes them (D of the
+// rest and of a).
+PFVI_VECTOR_CLONES
+static void weak_pull_stages(const double (*xi)[3], const double (*xj)[3], const double (*a)[3], int s,
+        const double shift[3], double Gm, double softening2, const double* weights, struct weak_pull* out){
+    typedef long long lanes_mask __attribute__((vector_size(4*sizeof(long long))));
+    pfvi_lanes A2 = {0., 0., 0., 0.}, F2 = {0., 0., 0., 0.};
+    double D[3] = {0., 0., 0.}, Da[3] = {0., 0., 0.};
+    for (int k0=0; k0<s; k0+=4){
+        const int n = (s - k0 < 4) ? s - k0 : 4;
+        const int k1 = (n > 1) ? k0 + 1 : k0, k2 = (n > 2) ? k0 + 2 : k0, k3 = (n > 3) ? k0 + 3 : k0;
+        const int k[4] = {k0, k1, k2, k3};
+        pfvi_lanes d[3], rest[3];
+        for (int c=0; c<3; c++){
+            d[c] = (stage_lanes(xj, k, c) + shift[c]) - stage_lanes(xi, k, c);
+        }
+        const pfvi_lanes al[3] = {stage_lanes(a, k, 0), stage_lanes(a, k, 1), stage_lanes(a, k, 2)};
+        const pfvi_lanes r2 = (d[0]*d[0] + d[1]*d[1] + d[2]*d[2]) + softening2;
+        pfvi_lanes root;
+        for (int l=0; l<4; l++){
+            root[l] = sqrt(r2[l]);
+        }
+        const pfvi_lanes pull = Gm/(r2*root);
+        for (int c=0; c<3; c++){
+            rest[c] = al[c] - pull*d[c];
+        }
+        const pfvi_lanes a2 = al[0]*al[0] + al[1]*al[1] + al[2]*al[2];
+        const pfvi_lanes f2 = rest[0]*rest[0] + rest[1]*rest[1] + rest[2]*rest[2];
+        // (x > y ? x : y) lane by lane.
+        const lanes_mask ma = (a2 > A2), mf = (f2 > F2);
+        A2 = (pfvi_lanes)((ma & (lanes_mask)a2) | (~ma & (lanes_mask)A2));
+        F2 = (pfvi_lanes)((mf & (lanes_mask)f2) | (~mf & (lanes_mask)F2));
+        const pfvi_lanes w = {weights[k0], weights[k1], weights[k2], weights[k3]};
+        for (int c=0; c<3; c++){
+            const pfvi_lanes p = w*rest[c], pa = w*al[c];
+            if (n == 4){
+                D[c] = (((D[c] + p[0]) + p[1]) + p[2]) + p[3];
+                Da[c] = (((Da[c] + pa[0]) + pa[1]) + pa[2]) + pa[3];
+            }else{
+                for (int l=0; l<n; l++){
+                    D[c] += p[l];
+                    Da[c] += pa[l];
+                }
+            }
+        }
+    }
+    double A2_max = 0., F2_max = 0.;
+    for (int l=0; l<4; l++){
+        A2_max = (A2[l] > A2_max) ? A2[l] : A2_max;
+        F2_max = (F2[l] > F2_max) ? F2[l] : F2_max;
+    }
+    out->A2 = A2_max;
+    out->F2 = F2_max;
+    for (int c=0; c<3; c++){
+        out->D[c] = D[c];
+    }
+    out->net = (A2_max > 0.) ? sqrt((Da[0]*Da[0] + Da[1]*Da[1] + Da[2]*Da[2])/A2_max) : 0.;
+}
+
+static struct weak_pull weak_pull_of(const struct reb_simulation* r, const struct pfvi_state* st, size_t N, size_t i,
+        const struct pfvi_field* field, const double* weights, const double (*a)[3]){
+    struct weak_pull w = {0, 0., 0., {0., 0., 0.}, 0.};
     const struct pfvi_partner* const q = &st->partners[i];
     if (q->j >= N || q->j == i || q->image >= field->n_images || !(r->particles[q->j].m > 0.) || !(field->G > 0.)){
-        return 0.;
+        return w;
     }
     if (N < 3 && field->n_images == 1 && !r->additional_forces){
-        return 0.;    // two bodies alone: no pull but the partner's
+        return w;    // two bodies alone: no pull but the partner's
     }
-    const int s = st->options.stages;
     const struct pfvi_scheme* const scheme = pfvi_scheme_of(st);
-    double xi[PFVI_STAGES_MAX][3], xj[PFVI_STAGES_MAX][3], rest[PFVI_STAGES_MAX][3];
+    double xi[PFVI_STAGES_MAX][3], xj[PFVI_STAGES_MAX][3];
     scheme->stage_positions(r, st, i, xi);
     scheme->stage_positions(r, st, q->j, xj);
     const struct reb_vec6d* const sh = &field->images[q->image];
     const double shift[3] = {sh->x, sh->y, sh->z};
-    const double Gm = field->G*r->particles[q->j].m;
-    double A2 = 0., F2 = 0.;
-    for (int k=0; k<s; k++){
-        double d[3];
-        for (int c=0; c<3; c++){
-            d[c] = (xj[k][c] + shift[c]) - xi[k][c];
-        }
-        const double r2 = (d[0]*d[0] + d[1]*d[1] + d[2]*d[2]) + field->softening2;
-        const double pull = Gm/(r2*sqrt(r2));
-        for (int c=0; c<3; c++){
-            rest[k][c] = a[k][c] - pull*d[c];
-        }
-        const double a2 = a[k][0]*a[k][0] + a[k][1]*a[k][1] + a[k][2]*a[k][2];
-        const double f2 = rest[k][0]*rest[k][0] + rest[k][1]*rest[k][1] + rest[k][2]*rest[k][2];
-        A2 = (a2 > A2) ? a2 : A2;
-        F2 = (f2 > F2) ? f2 : F2;
+    weak_pull_stages((const double (*)[3])xi, (const double (*)[3])xj, a, st->options.stages, shift,
+        field->G*r->particles[q->j].m, field->softening2, weights, &w);
+    w.any = 1;
+    return w;
+}
+
+static double weak_pull_ratio(const struct weak_pull* w, double pull2){
+    if (!w->any){
+        return 0.;
     }
-    A2 = fmax(A2, pull2);
+    const double A2 = fmax(w->A2, pull2), F2 = w->F2;
     if (!(F2 > 0.) || !(A2 > 0.) || !(F2 < A2)){
         return 0.;    // no weaker pull: the check against A covers it
     }
-    // |D_p|/F from the rest's own stage values.
-    const double dp = pfvi_stage_resolution((const double (*)[3])rest, (const double (*)[3])rest, weights, s, 0.);
+    // |D_p|/F from the rest's own stage values (pfvi_stage_resolution of the
+    // rest against itself: its largest square is F2).
+    const double dp = sqrt((w->D[0]*w->D[0] + w->D[1]*w->D[1] + w->D[2]*w->D[2])/F2);
     // Held PFVI_WEAK_PULL_MARGIN times below a Kepler orbit's error (the
     // error goes as the ratio squared).
     const double ratio = sqrt(PFVI_WEAK_PULL_MARGIN)*dp*sqrt(sqrt(F2/A2));
@@ -206,7 +288,11 @@ struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, con
             }
         }
         const double (*const values)[3] = (omega != 0.) ? (const double (*)[3])f : (const double (*)[3])a;
-        double ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, 0.);
+        // (The weak-pull check's stage loop measures the net resolution too.)
+        const int weak_check = field && !residual && omega == 0. && st->partners;
+        const struct weak_pull w = weak_check ? weak_pull_of(r, st, N, i, field, weights, (const double (*)[3])a)
+            : (struct weak_pull){0, 0., 0., {0., 0., 0.}, 0.};
+        double ratio = w.any ? w.net : pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, 0.);
         double pull2 = -1.;    // the largest pull's square, once measured
         if (field && ratio > pull_above){
             // Unresolved against its net acceleration: measured against the
@@ -216,14 +302,13 @@ struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, con
             pull2 = fmax(pull0, pull1);
             ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, pull2);
         }
-        if (field && !residual && omega == 0. && st->partners){
-            const double weak = pfvi_weak_pull_resolution(r, st, N, i, field, weights, (const double (*)[3])a, pull2);
+        if (weak_check){
+            const double weak = weak_pull_ratio(&w, pull2);
             if (weak > ratio && field && weak > pull_above && pull2 < 0.){
                 // Measured against the largest pull too, as above.
                 const double pull0 = pfvi_largest_pull2(st->start, N, field, i);
                 const double pull1 = pfvi_largest_pull2(r->particles, N, field, i);
-                const double again = pfvi_weak_pull_resolution(r, st, N, i, field, weights, (const double (*)[3])a,
-                    fmax(pull0, pull1));
+                const double again = weak_pull_ratio(&w, fmax(pull0, pull1));
                 ratio = fmax(ratio, again);
             }else{
                 ratio = fmax(ratio, weak);

@@ -475,15 +475,27 @@ static int encounter_weight(const struct encounter_pair* q, const double d[3], c
         }
     }
     const double R = R_i + R_j + Q;
-    // A weight below `least` (the term would be negligible): no pow().
+    if (!(R > 0.)){
+        return 0;
+    }
+    // A weight below `least` (the term would be negligible): no pow(). The
+    // floor least^order is the product least*least*... in that order; with
+    // 0 <= least <= 1 no partial product is below the last, so once one is
+    // at or below x, the last is too and x passes: the product stops there
+    // (the same decision as the whole product's).
+    const double x = R/(1. + R);
+    const int shrinking = (least >= 0. && least <= 1.);
     double floor = 1.;
     for (int k=0; k<q->order; k++){
         floor *= least;
+        if (shrinking && floor <= x){
+            break;
+        }
     }
-    if (!(R > 0.) || R/(1. + R) < floor){
+    if (x < floor){
         return 0;
     }
-    *weight = pow(R/(1. + R), q->exponent);
+    *weight = pow(x, q->exponent);
     *dlog = q->exponent*(R_i*dlog_i + R_j*dlog_j + dQ)/(R*(1. + R));
     return isfinite(*weight) && isfinite(*dlog);
 }
@@ -533,33 +545,150 @@ static void encounter_term(const double d[3], const double w[3], const double b[
     }
 }
 
-#define PFVI_PREFILTER_N_MIN 32
+// encounter_term and encounter_weight for the pairs (i, j0 .. j0 + n - 1)
+// without ghost boxes, their arithmetic four pairs at a time in vector lanes
+// (each lane the scalar expressions, in their order: the same bits), and
+// their tests, choices and sums pair by pair in the scalar loop's order.
+// The pairs whose two early tests all fail (bound; below `negligible` at
+// the block's start, which only grows within a scan) are left at those.
+struct encounter_scan {
+    const struct reb_particle* p;
+    const struct pfvi_end_state* start;
+    size_t N;
+    const struct pfvi_field* f;
+    const struct pfvi_partner* partners;
+    double exponent;    // 1/(2s - 2); 0: unweighted
+    int order;          // 2s - 2
+};
 
-// encounter_term's two early tests (bound; below `negligible`) for the
-// pairs (i, j0 .. j0 + 3) without ghost boxes, in vector lanes, each lane
-// the scalar expressions: pass[l] = 0 where encounter_term would return
-// before its first effect. The sum's largest term only grows within a scan,
-// so a pair failing at this `negligible` fails at the later one too; the
-// pairs passing are tested again by encounter_term itself.
-static inline __attribute__((always_inline)) void encounter_prefilter(const struct reb_particle* p, size_t N, size_t i,
-        size_t j0, size_t n, const struct pfvi_field* f, double negligible, int pass[4]){
-    struct lanes_block b;
-    block_at(f, p, N, j0, (n < 4) ? n : 4, &b);
+static inline __attribute__((always_inline)) void encounter_block(const struct encounter_scan* e, size_t i,
+        int i_attracts, size_t j0, size_t n, struct density_sum* sum){
+    const struct reb_particle* const p = e->p;
+    const struct pfvi_field* const f = e->f;
+    struct lanes_block bl;
+    block_at(f, p, e->N, j0, n, &bl);
     const struct reb_vec6d* const sh = &f->images[0];
-    const pfvi_lanes d0 = (b.x + lanes_of(sh->x)) - lanes_of(p[i].x), d1 = (b.y + lanes_of(sh->y)) - lanes_of(p[i].y),
-        d2 = (b.z + lanes_of(sh->z)) - lanes_of(p[i].z);
-    const pfvi_lanes w0 = (b.vx + lanes_of(sh->vx)) - lanes_of(p[i].vx),
-        w1 = (b.vy + lanes_of(sh->vy)) - lanes_of(p[i].vy), w2 = (b.vz + lanes_of(sh->vz)) - lanes_of(p[i].vz);
-    const pfvi_lanes mu = lanes_of(f->G)*(lanes_of(p[i].m) + b.m);
+    const pfvi_lanes d0 = (bl.x + lanes_of(sh->x)) - lanes_of(p[i].x), d1 = (bl.y + lanes_of(sh->y)) - lanes_of(p[i].y),
+        d2 = (bl.z + lanes_of(sh->z)) - lanes_of(p[i].z);
+    const pfvi_lanes w0 = (bl.vx + lanes_of(sh->vx)) - lanes_of(p[i].vx),
+        w1 = (bl.vy + lanes_of(sh->vy)) - lanes_of(p[i].vy), w2 = (bl.vz + lanes_of(sh->vz)) - lanes_of(p[i].vz);
+    const pfvi_lanes mu = lanes_of(f->G)*(lanes_of(p[i].m) + bl.m);
     const pfvi_lanes rs2 = (d0*d0 + d1*d1 + d2*d2) + lanes_of(f->softening2);
     const pfvi_lanes v2 = w0*w0 + w1*w1 + w2*w2;
     const pfvi_lanes bound_lhs = v2*v2*rs2, bound_rhs = lanes_of(4.)*mu*mu;
     const pfvi_lanes P = d0*w0 + d1*w1 + d2*w2;
     const pfvi_lanes C = P*P/(v2*rs2);
     const pfvi_lanes boost = lanes_of(1.) + lanes_of(PFVI_ENCOUNTER_APPROACH)*C;
-    const pfvi_lanes near_lhs = v2*boost*boost, near_rhs = lanes_of(negligible)*lanes_of(negligible)*rs2;
+    const pfvi_lanes near_lhs = v2*boost*boost;
+    const double negligible0 = PFVI_DENSITY_NEGLIGIBLE*sum->largest;
+    const pfvi_lanes near_rhs = lanes_of(negligible0)*lanes_of(negligible0)*rs2;
+    int any = 0;
+    for (size_t l=0; l<n; l++){
+        any |= (bound_lhs[l] > bound_rhs[l]) && (near_lhs[l] > near_rhs[l]);
+    }
+    if (!any){
+        return;
+    }
+    // The relative accelerations, and each j's partner pull and frequency.
+    const double* const ai = acceleration_of(p, e->start, i);
+    const struct pfvi_partner* const pi = &e->partners[i];
+    pfvi_lanes b0, b1, b2, pull_j, dlog_pull_j, S_j;
     for (int l=0; l<4; l++){
-        pass[l] = (bound_lhs[l] > bound_rhs[l]) && (near_lhs[l] > near_rhs[l]);
+        const size_t j = j0 + (((size_t)l < n) ? (size_t)l : 0);
+        const double* const aj = acceleration_of(p, e->start, j);
+        b0[l] = aj[0] - ai[0]; b1[l] = aj[1] - ai[1]; b2[l] = aj[2] - ai[2];
+        const struct pfvi_partner* const pj = &e->partners[j];
+        pull_j[l] = pj->pull;
+        dlog_pull_j[l] = pj->dlog_pull;
+        S_j[l] = (pj->pull > 0.) ? pj->stiffness : 0.;
+    }
+    pfvi_lanes root_ratio;     // sqrt(rs2/v2), for `least`
+    pfvi_lanes rs;
+    for (int l=0; l<4; l++){
+        root_ratio[l] = sqrt(rs2[l]/v2[l]);
+        rs[l] = sqrt(rs2[l]);
+    }
+    // encounter_weight's pull ratios (pull_ratio: its rd2 is rs2, and -d, -w
+    // give the same squares and products) and crossing rate.
+    const pfvi_lanes two_P_rs2 = lanes_of(2.)*P/rs2;
+    const pfvi_lanes R_i = (bl.m/rs2)/lanes_of(pi->pull);
+    const pfvi_lanes dlog_i = -lanes_of(pi->dlog_pull) - two_P_rs2;
+    const pfvi_lanes R_j = (lanes_of(i_attracts ? p[i].m : 0.)/rs2)/pull_j;
+    const pfvi_lanes dlog_j = -dlog_pull_j - two_P_rs2;
+    const double S_i = (pi->pull > 0.) ? pi->stiffness : 0.;
+    const pfvi_lanes S = lanes_of(S_i) + S_j;
+    const pfvi_lanes X = v2/(rs2*lanes_of(f->G)*S);
+    const pfvi_lanes wb = w0*b0 + w1*b1 + w2*b2;
+    const pfvi_lanes dlog_X = lanes_of(2.)*wb/v2 - two_P_rs2
+        - lanes_of(1.5)*(lanes_of(S_i*pi->dlog_pull) + S_j*dlog_pull_j)/S;
+    const pfvi_lanes X2 = X*X;
+    const pfvi_lanes Q = X2*X2;
+    const pfvi_lanes dQ = lanes_of(PFVI_ENCOUNTER_FAST_POWER)*dlog_X*Q;
+    // encounter_term's term (before its weight) and rate (before the weight's).
+    pfvi_lanes q, nu_ff;
+    const pfvi_lanes q2 = v2*rs/mu, nu2 = mu/(rs2*rs);
+    for (int l=0; l<4; l++){
+        q[l] = sqrt(q2[l]);
+        nu_ff[l] = sqrt(nu2[l]);
+    }
+    const pfvi_lanes base = nu_ff*(q - lanes_of(M_SQRT2))*boost;
+    const pfvi_lanes db = d0*b0 + d1*b1 + d2*b2;
+    const pfvi_lanes dlog_q = wb/v2 + lanes_of(0.5)*P/rs2;
+    const pfvi_lanes dC = lanes_of(2.)*P*(v2 + db)/(v2*rs2) - lanes_of(2.)*C*(wb/v2 + P/rs2);
+    const pfvi_lanes dlog_base = lanes_of(-1.5)*P/rs2 + (q/(q - lanes_of(M_SQRT2)))*dlog_q
+        + lanes_of(PFVI_ENCOUNTER_APPROACH)*dC/boost;
+    for (size_t l=0; l<n; l++){
+        const size_t j = j0 + l;
+        const struct pfvi_partner* const pj = &e->partners[j];
+        const double negligible = PFVI_DENSITY_NEGLIGIBLE*sum->largest;
+        if (!(i_attracts || p[j].m > 0.) || !(bound_lhs[l] > bound_rhs[l])
+                || !(near_lhs[l] > negligible*negligible*rs2[l])){
+            continue;
+        }
+        double weight = 1., dlog_weight = 0.;
+        const double least = negligible*root_ratio[l]/boost[l];
+        // encounter_weight: 1 where the pair is either body's tightest (or
+        // a ratio or the crossing rate is not finite).
+        if (e->exponent > 0. && pi->pull > 0. && !(pi->j == j && pi->image == 0)
+                && pj->pull > 0. && !(pj->j == i && pj->image == 0)){
+            const double Ri = (p[j].m > 0.) ? R_i[l] : 0., dlog_Ri = (p[j].m > 0.) ? dlog_i[l] : 0.;
+            const double m_i = i_attracts ? p[i].m : 0.;
+            const double Rj = (m_i > 0.) ? R_j[l] : 0., dlog_Rj = (m_i > 0.) ? dlog_j[l] : 0.;
+            const int fast = (S[l] > 0.);
+            const double Ql = fast ? Q[l] : 0., dQl = fast ? dQ[l] : 0.;
+            if (isfinite(Ri) && isfinite(Rj) && (!fast || (isfinite(Ql) && isfinite(dQl)))){
+                const double R = Ri + Rj + Ql;
+                if (!(R > 0.)){
+                    continue;
+                }
+                // As encounter_weight: the floor's product stops once at or below x.
+                const double x = R/(1. + R);
+                const int shrinking = (least >= 0. && least <= 1.);
+                double floor = 1.;
+                for (int k=0; k<e->order; k++){
+                    floor *= least;
+                    if (shrinking && floor <= x){
+                        break;
+                    }
+                }
+                if (x < floor){
+                    continue;
+                }
+                weight = pow(x, e->exponent);
+                dlog_weight = e->exponent*(Ri*dlog_Ri + Rj*dlog_Rj + dQl)/(R*(1. + R));
+                if (!(isfinite(weight) && isfinite(dlog_weight))){
+                    continue;
+                }
+            }
+        }
+        const double term = base[l]*weight;
+        if (!(term > negligible) || !isfinite(term)){
+            continue;
+        }
+        const double dlog = dlog_base[l] + dlog_weight;
+        if (isfinite(dlog)){
+            density_add(sum, term, dlog, 1.);
+        }
     }
 }
 
@@ -605,19 +734,22 @@ int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state*
             partner_pulls(p, N, f, partners);
         }
         const size_t n_attracting = (f->N_active < N) ? f->N_active : N;
-        // (It pays where most pairs are negligible: in large systems. In a few
-        // bodies most pass, and the test would only be made twice.)
-        const int lanes = (f->n_images == 1 && N >= PFVI_PREFILTER_N_MIN);
+        const struct encounter_scan scan = {p, start, N, f, partners, exponent, 2*s - 2};
+        // Without ghost boxes four pairs at a time (the blocks hold p:
+        // pfvi_partner_search filled them); with them pair by pair, each
+        // image a pair.
         for (size_t i=0; i<N; i++){
             const int i_attracts = attracts(p, i, n_attracting);
             const size_t before = (i < n_attracting) ? i : n_attracting;
-            const double* const ai = acceleration_of(p, start, i);
-            int pass[4] = {1, 1, 1, 1};
-            for (size_t j=0; j<before; j++){
-                if (lanes && j % 4 == 0){
-                    encounter_prefilter(p, N, i, j, before - j, f, PFVI_DENSITY_NEGLIGIBLE*sum.largest, pass);
+            if (f->n_images == 1){
+                for (size_t j0=0; j0<before; j0+=4){
+                    encounter_block(&scan, i, i_attracts, j0, (before - j0 < 4) ? before - j0 : 4, &sum);
                 }
-                if (!(i_attracts || p[j].m > 0.) || !pass[j % 4]){
+                continue;
+            }
+            const double* const ai = acceleration_of(p, start, i);
+            for (size_t j=0; j<before; j++){
+                if (!(i_attracts || p[j].m > 0.)){
                     continue;
                 }
                 const double* const aj = acceleration_of(p, start, j);
