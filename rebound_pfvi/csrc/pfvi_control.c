@@ -715,7 +715,10 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
             const int jump = fmax(sigma0, sigma1)*lambda*h > PFVI_DENSITY_JUMP_MAX*kappa;
             // The error the stages imply, relative to the worst along
             // Kepler orbits (about epsilon per orbit there).
-            const int coarse = pow(u/u_target, 2.*o->stages - 2.) > PFVI_RESOLUTION_MAX;
+            // (Up to 1.05 the power is at most 1.05^14 < 2, below
+            // RESOLUTION_MAX: no pow() for the decision it would not change.)
+            const double ratio = u/u_target;
+            const int coarse = ratio > 1.05 && pow(ratio, 2.*o->stages - 2.) > PFVI_RESOLUTION_MAX;
             // Still coarse after the last retake: no shorter step resolves them.
             unresolved = coarse && retakes == PFVI_RESOLUTION_RETRIES;
             if (!jump && (!coarse || unresolved)){

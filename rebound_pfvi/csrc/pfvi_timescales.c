@@ -327,7 +327,7 @@ static int kepler_term(const struct kepler_orbit* o, double softening2, double g
         const double x = 1. - e2, held = fabs(x);
         const double floor = 1. - PFVI_DENSITY_E2_MAX;
         if (held <= floor){
-            factor = pow(floor, -gamma);
+            factor = factor_max;   // (pow(floor, -gamma))
         }else if (held < 1.){
             factor = pow(held, -gamma);
             dlog_factor = gamma*de2/x;
@@ -700,6 +700,17 @@ static double eccentricity_exponent(int s){
     return beta[s]/(2.*s - 2.);
 }
 
+// The factor's largest value (1 - E2_MAX)^(-gamma_s) for each s, made once
+// as the library loads (by the same pow the density called for it on every
+// evaluation before: the same bits).
+static double factor_max_of[PFVI_STAGES_MAX + 1];
+
+static void __attribute__((constructor)) factor_max_init(void){
+    for (int s=2; s<=PFVI_STAGES_MAX; s++){
+        factor_max_of[s] = pow(1. - PFVI_DENSITY_E2_MAX, -eccentricity_exponent(s));
+    }
+}
+
 PFVI_VECTOR_CLONES
 int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state* start, size_t N,
         const struct pfvi_field* f, int s, struct pfvi_partner* partners, double* sigma, double* dlog_sigma){
@@ -711,7 +722,7 @@ int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state*
         return 0;
     }
     struct density_sum sum = {0., 0., 0.};
-    const double factor_max = pow(1. - PFVI_DENSITY_E2_MAX, -gamma);
+    const double factor_max = factor_max_of[s];
     for (size_t i=0; i<N; i++){
         // Each orbit counts twice, once per body of a pair as the
         // calibration of C_s on two bodies had it: a pair of mutual
