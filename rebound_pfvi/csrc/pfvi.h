@@ -319,13 +319,17 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 #define PFVI_STEADY_EXCESS 0.02
 #define PFVI_STEADY_BODIES 3
 // Outputs (pfvi_output.c): a requested time within OUTPUT_NEAR of the run's
-// state, relative to the time the run has spanned (REBOUND's own tolerance
-// for finishing on time, 1e-12 of t), is that state's: shown as it is,
-// with no new step and no output step. A reversal comes back to its start
-// with t off by the steps' rounding (1.4e-11 after 2600 steps at e = 0.95,
-// the state within 1e-13 of the start): a new step there and an output
-// step back left integrate(400) and back 8.5e-11 AU off instead.
+// state, relative to the time the run has spanned, plus OUTPUT_NEAR_ULPS of
+// t's last places, is that state's: shown as it is, with no new step and no
+// output step. A reversal comes back to its start with t off by the steps'
+// rounding (1.4e-11 after 2600 steps at e = 0.95, the state within 1e-13 of
+// the start): a new step there and an output step back left integrate(400)
+// and back 8.5e-11 AU off instead. Not relative to |t| itself (REBOUND's
+// tolerance for its last step, 1e-12 of t): a run from t = 1e10 showed a
+// state 0.005 before the requested time as that time's (a hostile trial:
+// 0.017 off IAS15 on Kepler e = 0.9).
 #define PFVI_OUTPUT_NEAR 1e-12
+#define PFVI_OUTPUT_NEAR_ULPS 2.
 // Variational particles found scaled by one factor since an output (REBOUND
 // rescales them past 1e100) within this relative slack are taken as
 // rescaled, not edited: the run's are scaled alike.

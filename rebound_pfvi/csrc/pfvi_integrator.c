@@ -220,8 +220,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "solve per step, and a round trip retraces the steps: sim.steps(n), sim.dt = -sim.dt, "
       "sim.steps(n) comes back to the start, and so does integrate(T) then integrate(0) (the track's "
       "drift average counts each interval once, so a reversal does not fire it anew; a requested time "
-      "within " PFVI_STR(PFVI_OUTPUT_NEAR) " of the run's span from the state reached is taken as "
-      "reached). A steady density holds the track: with " PFVI_STR(PFVI_STEADY_BODIES) " or more bodies, "
+      "within " PFVI_STR(PFVI_OUTPUT_NEAR) " of the run's span (and " PFVI_STR(PFVI_OUTPUT_NEAR_ULPS) " of t's last "
+      "places) from the state reached is taken as reached). A steady density holds the track: with " PFVI_STR(PFVI_STEADY_BODIES) " or more bodies, "
       "where the density at the ends of at least " PFVI_STR(PFVI_STEADY_WINDOW) " intervals in a row, spanning "
       "a cycle of the slowest orbit (2 pi/sqrt(G (m_i + m_j)/r^3) of the loosest partner pair), stayed "
       "within a factor 1 + " PFVI_STR(PFVI_STEADY_BAND) " (a planetary system of low eccentricities), rho "
@@ -932,6 +932,15 @@ static void glue_show_again(struct reb_simulation* r, struct pfvi_state* st, con
     }
 }
 
+// How far a requested time may lie from the run's state at t and still be
+// that state's time (PFVI_OUTPUT_NEAR): 1e-12 of the time the run has spanned
+// (its track, or the last step where the track is not kept) and a few of t's
+// last places, for the rounding a round trip's steps leave in t.
+static double output_near(const struct pfvi_state* st, double t, double step){
+    const double span = fmax(fabs(step), st->track_seen_hi - st->track_seen_lo);
+    return PFVI_OUTPUT_NEAR*span + PFVI_OUTPUT_NEAR_ULPS*DBL_EPSILON*fabs(t);
+}
+
 static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_call* c){
     *c = (struct pfvi_call){.t_entry = r->t, .dt_entry = r->dt, .t_target = r->t + r->dt};
     c->finishing = (st->status_at_start == REB_STATUS_LAST_STEP);
@@ -1009,8 +1018,7 @@ static enum pfvi_glue glue_start(struct reb_simulation* r, struct pfvi_state* st
     // The last step went from output_last_t0 to t0 (its end unedited): a
     // time inside it is shown from here, with no step of the run.
     const double d = t0 - st->output_last_t0;
-    const double span = fmax(fmax(fabs(t0), fabs(d)), st->track_seen_hi - st->track_seen_lo);
-    const int near = c->at_end && fabs(c->t_target - t0) <= PFVI_OUTPUT_NEAR*span;
+    const int near = c->at_end && fabs(c->t_target - t0) <= output_near(st, t0, d);
     const int inside = near || (c->at_end && t0 == st->output_last_t1 && (t0 - c->t_target)*d > 0.
         && (c->t_target - st->output_last_t0)*d > 0.);
     if (c->t_target == t0 || (inside && st->output_failed_t != t0)){
@@ -1026,8 +1034,7 @@ static enum pfvi_glue glue_show_inside(struct reb_simulation* r, struct pfvi_sta
         size_t N){
     const double t0 = c->t0;
     const double d = t0 - st->output_last_t0;
-    const double span = fmax(fmax(fabs(t0), fabs(d)), st->track_seen_hi - st->track_seen_lo);
-    const int near = fabs(c->t_target - t0) <= PFVI_OUTPUT_NEAR*span;
+    const int near = fabs(c->t_target - t0) <= output_near(st, t0, d);
     const enum pfvi_trial trial = (c->t_target == t0) ? PFVI_TRIAL_OK
         : pfvi_output_present(r, st, N, c->t_target, near);
     if (trial == PFVI_TRIAL_OK){
@@ -1126,9 +1133,8 @@ static enum pfvi_glue glue_show_passed(struct reb_simulation* r, struct pfvi_sta
         size_t N){
     const double t_end = r->t, h = c->h;
     const double proposed = r->dt;
-    const double span = fmax(fmax(fabs(t_end), fabs(h)), st->track_seen_hi - st->track_seen_lo);
     const enum pfvi_trial trial = pfvi_output_present(r, st, N, c->t_target,
-            fabs(c->t_target - t_end) <= PFVI_OUTPUT_NEAR*span);
+            fabs(c->t_target - t_end) <= output_near(st, t_end, h));
     r->dt = proposed;
     if (trial == PFVI_TRIAL_OK){
         r->dt_last_done = pfvi_shown_dt_done(r, h);
