@@ -149,3 +149,24 @@ def test_outputs_without_a_new_dt_keep_the_run_unbroken():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert [p.xyz for p in many.particles] == [p.xyz for p in single.particles]
+
+
+@pytest.mark.parametrize("gravity", ["mercurius", "jacobi"])
+def test_a_gravity_mode_of_another_integrator_is_refused_naming_it(gravity):
+    # 'mercurius': REBOUND raised mid-step, after pfvi had moved the bodies
+    # (t 0.297 when the error came); 'jacobi': no force at all, free motion
+    # (32 AU off after 3 orbits). Hostile trial, 2026-11-27.
+    sim = kepler()
+    sim.gravity = gravity
+    before = snapshot(sim)
+    with pytest.raises(RuntimeError, match=rf"sim\.gravity = \d+ \('{gravity}'\) is not supported"):
+        sim.integrate(10.0)
+    assert snapshot(sim) == before
+
+
+@pytest.mark.parametrize("gravity", ["basic", "compensated", "none"])
+def test_the_gravity_modes_pfvi_uses_still_run(gravity):
+    sim = kepler()
+    sim.gravity = gravity
+    sim.integrate(1.0)
+    assert sim.t == 1.0

@@ -657,6 +657,18 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_option
                 "Step not taken.", r->exit_min_distance);
         return 0;
     }
+    if (r->gravity != REB_GRAVITY_NONE && r->gravity != REB_GRAVITY_BASIC && r->gravity != REB_GRAVITY_COMPENSATED
+            && r->gravity != REB_GRAVITY_TREE && r->gravity != REB_GRAVITY_CUSTOM){
+        // 'jacobi' computes WHFast's Jacobi terms (with pfvi: no force at
+        // all, free motion); 'mercurius' and 'trace' are those integrators'
+        // own (REBOUND raises mid-step, after the step's first stages).
+        const char* const name = (r->gravity == REB_GRAVITY_JACOBI) ? "'jacobi'"
+            : (r->gravity == 4) ? "'mercurius'" : (r->gravity == 6) ? "'trace'" : "not a mode";
+        pfvi_error(r, "pfvi: sim.gravity = %d (%s) is not supported: pfvi needs the forces in the simulation's own "
+                "frame, from 'basic' (the default), 'compensated', 'tree', 'none' or a custom routine. Step not "
+                "taken.", (int)r->gravity, name);
+        return 0;
+    }
     if (r->N_var && r->gravity != REB_GRAVITY_BASIC){
         pfvi_error(r, "pfvi: variational particles (N_var = %zu) need sim.gravity = 'basic', the one mode in "
                 "which REBOUND computes their forces; not supported with gravity mode %d.", r->N_var, (int)r->gravity);
