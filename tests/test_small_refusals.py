@@ -79,10 +79,21 @@ def test_point_masses_colliding_are_refused_with_the_cause():
             break
     else:
         pytest.fail("no refusal")
-    assert "particles 0 and 1 collide" in message and "radii" in message and "sim.collision" in message
+    assert "particles 0 and 1," in message and "Colliding: give them radii and set sim.collision" in message
     assert "larger dt" not in message
     assert snapshot(sim) == before
     assert abs(sim.particles[1].x - sim.particles[0].x) < 1e-9
+
+
+def test_an_orbit_too_fast_for_a_large_t_is_named_as_such():
+    # At t = 1e15 t's last place is 0.125, longer than an e = 0.9 pericentre
+    # passage: the message said the two bodies collide (hostile trial).
+    sim = kepler(e=0.9)
+    sim.t = 1e15
+    before = snapshot(sim)
+    with pytest.raises(RuntimeError, match=r"below t's last place 0\.12\. .*else start t nearer 0\."):
+        sim.integrate(1e15 + 100.0)
+    assert snapshot(sim) == before
 
 
 def test_a_step_below_the_rounding_of_t_still_blames_dt():

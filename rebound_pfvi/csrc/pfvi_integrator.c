@@ -727,7 +727,15 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
         // integrator's own state as it was too.
         for (size_t i=0; i<N; i++){
             if (!pfvi_particle_finite(&ps[i])){
-                pfvi_error(r, "pfvi: particle %zu has a non-finite position, velocity or mass; step not taken.", i);
+                // (the first field at fault, by name)
+                const struct reb_particle* const q = &ps[i];
+                const char* const names[7] = {"x", "y", "z", "vx", "vy", "vz", "m"};
+                const double values[7] = {q->x, q->y, q->z, q->vx, q->vy, q->vz, q->m};
+                int k = 0;
+                while (k < 6 && isfinite(values[k])){
+                    k++;
+                }
+                pfvi_error(r, "pfvi: particle %zu has %s = %g, not finite; step not taken.", i, names[k], values[k]);
                 return 0;
             }
             if (ps[i].m < 0.){
@@ -1105,10 +1113,13 @@ static enum pfvi_glue glue_step(struct reb_simulation* r, struct pfvi_state* st,
         double separation, omega;
         if (st->options.epsilon > 0. && pfvi_tightest_pair(r, N, &pi, &pj, &separation, &omega)
                 && omega*fabs(t0)*DBL_EPSILON > PFVI_TIGHT_PAIR_ROUNDING){
-            // The adaptive step followed a pair closing in: not dt's fault.
-            pfvi_error(r, "pfvi: particles %zu and %zu collide (%.3g apart at t = %.17g; time scale %.2g, below "
-                    "t's rounding). Not taken, state restored. Give them radii and set sim.collision, or stop "
-                    "first with sim.exit_min_distance.", pi, pj, separation, t0, 1./omega);
+            // The adaptive step followed the tightest pair: not dt's fault.
+            // Either it is closing in, or t is too large for its orbit (an e =
+            // 0.9 pericentre at t = 1e15, where t's last place is 0.125).
+            pfvi_error(r, "pfvi: particles %zu and %zu, %.3g apart at t = %.17g: their time scale %.2g is below t's "
+                    "last place %.2g. Not taken, state restored. Colliding: give them radii and set sim.collision "
+                    "(or sim.exit_min_distance); else start t nearer 0.", pi, pj, separation, t0, 1./omega,
+                    nextafter(fabs(t0), INFINITY) - fabs(t0));
             return PFVI_GLUE_DONE;
         }
         pfvi_error(r, "pfvi: the step dt = %.3g does not change t = %.17g (it is below the rounding of t); "
