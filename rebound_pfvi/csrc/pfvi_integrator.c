@@ -272,7 +272,11 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "u = u_max) for h, fitted to the mean of the curvature frequencies at its two ends, as in "
       "Hut, Makino & McMillan 1995 (ApJ 443, L93); it costs about 3 to 5 trial steps per step "
       "(n_attempts), and near pericentre and apocentre the two directions may pick different "
-      "steps. Type: text. Default 'symmetric'.",
+      "steps. With 'seed' and 'reversible' epsilon bounds each step's estimate, not the error, which "
+      "adds up over the steps: after 3 orbits of Kepler e = 0.99 at s = 2 and epsilon 1e-6 they end "
+      "0.88 and 1.5 off (e = 0.5: 0.012, 0.014), 'symmetric' 1.2e-6 (against IAS15: benchmarks/"
+      "step_controls_error.py). "
+      "Type: text. Default 'symmetric'.",
       REB_INT, "step_control", offsetof(struct pfvi_state, settings.step_control), 0, 0, pfvi_step_control_enum },
     { "", REB_POINTER, "compensation", offsetof(struct pfvi_state, compensation),
         offsetof(struct pfvi_state, N_compensation), sizeof(struct pfvi_compensation), 0 },
