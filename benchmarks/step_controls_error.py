@@ -6,20 +6,16 @@ figures in help(sim.integrator)'s step_control text come from here.
     python -P benchmarks/step_controls_error.py     # about 2 minutes (the symmetric s = 2 runs)
 """
 import math
-
-import rebound
+import sys
+from pathlib import Path
 
 import rebound_pfvi  # noqa: F401
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from stages import two_body as kepler  # noqa: E402  (Sun and a planet of 1e-3, a = 1)
+
 CASES = ((0.5, 2, 1e-6), (0.99, 2, 1e-6), (0.99, 4, 1e-4), (0.99, 8, 1e-4))
-
-
-def kepler(e):
-    sim = rebound.Simulation()
-    sim.add(m=1.0)
-    sim.add(m=1e-3, a=1.0, e=e)
-    sim.move_to_com()
-    return sim
 
 
 def main():

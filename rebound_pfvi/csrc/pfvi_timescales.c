@@ -425,6 +425,22 @@ struct encounter_pair {
     int order;          // 2s - 2
 };
 
+// Whether the weight x = R/(1 + R) reaches the floor least^order, the
+// product least*least*... taken in that order: with 0 <= least <= 1 no
+// partial product is below the last, so once one is at or below x the
+// whole is too and the product stops there (the same decision).
+static inline int weight_reaches(double x, double least, int order){
+    const int shrinking = (least >= 0. && least <= 1.);
+    double floor = 1.;
+    for (int k=0; k<order; k++){
+        floor *= least;
+        if (shrinking && floor <= x){
+            break;
+        }
+    }
+    return !(x < floor);
+}
+
 // The weight (R'/(1 + R'))^(1/(2s - 2)) of a pair's encounter term and d
 // log(weight)/dt; 1 where the pair is either body's tightest. R' = R + X^p:
 // R = R_i + R_j the pair's pull on each body against the body's partner
@@ -478,21 +494,9 @@ static int encounter_weight(const struct encounter_pair* q, const double d[3], c
     if (!(R > 0.)){
         return 0;
     }
-    // A weight below `least` (the term would be negligible): no pow(). The
-    // floor least^order is the product least*least*... in that order; with
-    // 0 <= least <= 1 no partial product is below the last, so once one is
-    // at or below x, the last is too and x passes: the product stops there
-    // (the same decision as the whole product's).
+    // A weight below `least` (the term would be negligible): no pow().
     const double x = R/(1. + R);
-    const int shrinking = (least >= 0. && least <= 1.);
-    double floor = 1.;
-    for (int k=0; k<q->order; k++){
-        floor *= least;
-        if (shrinking && floor <= x){
-            break;
-        }
-    }
-    if (x < floor){
+    if (!weight_reaches(x, least, q->order)){
         return 0;
     }
     *weight = pow(x, q->exponent);
@@ -661,17 +665,8 @@ static inline __attribute__((always_inline)) void encounter_block(const struct e
                 if (!(R > 0.)){
                     continue;
                 }
-                // As encounter_weight: the floor's product stops once at or below x.
                 const double x = R/(1. + R);
-                const int shrinking = (least >= 0. && least <= 1.);
-                double floor = 1.;
-                for (int k=0; k<e->order; k++){
-                    floor *= least;
-                    if (shrinking && floor <= x){
-                        break;
-                    }
-                }
-                if (x < floor){
+                if (!weight_reaches(x, least, e->order)){
                     continue;
                 }
                 weight = pow(x, e->exponent);
