@@ -211,3 +211,22 @@ def test_add_operator_is_wrapped_whichever_is_imported_first(first):
             "print(getattr(reboundx.Extras.add_operator, '_pfvi', False))")
     out = subprocess.run([sys.executable, "-P", "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "True"
+
+
+def test_a_reboundx_error_inside_the_forces_refuses_the_step_reboundx():
+    # "gr" without the speed of light: REBOUNDx raises inside the force call;
+    # the step that had called it was taken (IAS15 still takes one).
+    reboundx = pytest.importorskip("reboundx")
+    import rebound
+
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=0.5)
+    sim.move_to_com()
+    sim.integrator = "pfvi"
+    rx = reboundx.Extras(sim)
+    rx.add_force(rx.load_force("gr"))
+    before = (sim.t, [(p.x, p.y, p.z, p.vx, p.vy, p.vz) for p in sim.particles])
+    with pytest.raises(RuntimeError, match="Need to set speed of light"):
+        sim.integrate(10.0)
+    assert (sim.t, [(p.x, p.y, p.z, p.vx, p.vy, p.vz) for p in sim.particles]) == before

@@ -181,3 +181,40 @@ def test_the_gravity_modes_pfvi_uses_still_run(gravity):
     sim.gravity = gravity
     sim.integrate(1.0)
     assert sim.t == 1.0
+
+
+def failing_forces_run(fail_at):
+    sim = kepler()
+    calls = [0]
+
+    def forces(simp):
+        calls[0] += 1
+        if fail_at and calls[0] >= fail_at:
+            # (from then on, and leaves forces that are not to be used)
+            simp.contents.particles[1].ax += 1.0
+            rebound.clibrebound.reb_simulation_error(simp, b"a force callback failed")
+
+    sim.additional_forces = forces
+    sim.force_is_velocity_dependent = 0
+    return sim
+
+
+def test_an_error_raised_inside_the_forces_refuses_the_step():
+    # REBOUND's error inside a force evaluation (a REBOUNDx effect without its
+    # parameter, a callback calling reb_simulation_error) left the step taken
+    # on the forces it had left (hostile trial): now the step is refused, the
+    # state is the last step's end, bit for bit, and REBOUND's message is
+    # the one raised.
+    sim = failing_forces_run(40)
+    with pytest.raises(RuntimeError, match="a force callback failed"):
+        sim.integrate(50.0)
+    shown = snapshot(sim)
+    reference = failing_forces_run(0)
+    while reference.t < shown[0]:
+        reference.steps(1)
+    assert snapshot(reference) == shown
+    # Each call after is refused the same way (the callback keeps failing),
+    # with nothing else left in REBOUND's messages.
+    with pytest.raises(RuntimeError, match="^a force callback failed$"):
+        sim.integrate(50.0)
+    assert snapshot(sim) == shown

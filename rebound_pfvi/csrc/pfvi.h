@@ -819,6 +819,7 @@ enum pfvi_fault_kind {
     PFVI_FAULT_PARTICLE_EDITED, // t, particle (SIZE_MAX: t itself), flag: which field (pfvi_written_fields)
     PFVI_FAULT_UNRESOLVED_FIXED,// particle, h, t0, value: the error per orbit the stages imply, bound: |h| sigma (0: not measured)
     PFVI_FAULT_VARIATIONAL,     // particle: the variational particle (index in particles_var), n: its real particle, flag: field (PFVI_WRITTEN_FIELDS), value, t0
+    PFVI_FAULT_REBOUND_ERROR,   // t: REBOUND raised an error inside a force evaluation (its message says why)
 };
 struct pfvi_fault {
     enum pfvi_fault_kind kind;

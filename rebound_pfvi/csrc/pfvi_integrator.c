@@ -578,6 +578,10 @@ static void pfvi_report(struct reb_simulation* r, const struct pfvi_state* st){
                         isnan(f->value) ? "NaN" : (f->value > 0.) ? "inf" : "-inf", f->t0);
             }
             break;
+        case PFVI_FAULT_REBOUND_ERROR:
+            // REBOUND's own message names the cause; a second one would be
+            // left behind in its queue, to be raised by the next call.
+            break;
         case PFVI_FAULT_NONE:
             pfvi_error(r, "pfvi: step not taken (no cause recorded).");
             break;

@@ -694,6 +694,20 @@ static int written_changed(const struct reb_simulation* r, struct pfvi_state* st
     return 0;
 }
 
+// The number of messages REBOUND keeps (librebound exports it; rebound.h
+// does not declare it).
+extern const int reb_messages_max_N;
+
+// REBOUND's error messages waiting to be read (Python keeps them,
+// save_messages: each is raised when the call returns).
+static int rebound_errors(const struct reb_simulation* r){
+    int n = 0;
+    for (int i=0; r->messages != NULL && i<reb_messages_max_N; i++){
+        n += (r->messages[i] != NULL && r->messages[i][0] == 'e');
+    }
+    return n;
+}
+
 int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
     // Only user code (a force callback, custom gravity) can edit particles
     // during an evaluation; REBOUND's own gravity does not.
@@ -702,6 +716,7 @@ int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, si
     if (guarded){
         written_keep(r, st, N);
     }
+    const int errors = rebound_errors(r);
     reb_simulation_update_acceleration(r);
     st->statistics.n_force_evaluations++;
     if (st->reentry_refused){
@@ -711,6 +726,15 @@ int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, si
     }
     if (r->N != N){
         pfvi_roll_back_changed_N(r, st, N, t0);
+        return 0;
+    }
+    if (rebound_errors(r) > errors){
+        // An error inside the forces (a REBOUNDx effect without its
+        // parameter, a callback calling reb_simulation_error): the forces
+        // are not to be used. The step is refused, its state restored; the
+        // error is REBOUND's message, raised when the call returns.
+        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_REBOUND_ERROR, .t = t};
+        pfvi_roll_back(r, st, N, t0);
         return 0;
     }
     if (guarded && written_changed(r, st, N, t)){
