@@ -399,7 +399,10 @@ def _scene_from_args(parser: argparse.ArgumentParser, args: argparse.Namespace) 
             raise ValueError(f"its run would last {duration!r} yr")
         scene.build()
     except (ArithmeticError, ValueError, RuntimeError) as error:
-        parser.error(f"scene {args.scene}: these parameters give no scene to integrate: {error}")
+        # (an OverflowError from math carries an errno tuple: its text is the words)
+        reason = (f"a value overflows ({error.args[1]})" if isinstance(error, OverflowError) and len(error.args) == 2
+                  else error)
+        parser.error(f"scene {args.scene}: these parameters give no scene to integrate: {reason}")
     return scene
 
 

@@ -408,6 +408,8 @@ def write(results: Results, output: str, basename: Optional[str] = None,
     try:
         plot(results, base + ".png")
         paths["png"] = base + ".png"
+        # (the page links the figure only where there is one)
+        png_note = f"![work-precision diagram]({os.path.basename(base)}.png)\n"
     except ImportError:
         png_note = "\n(No plot: matplotlib is not installed; pip install 'rebound_pfvi[plot]'.)\n"
     m = data["machine"]
@@ -443,7 +445,6 @@ particle from its reference position at t_end (Kepler: of the relative position)
 
 {summary_table(results.rows, floor, length)}
 {_tighter_section(results.rows)}
-![work-precision diagram]({os.path.basename(base)}.png)
 {png_note}{bodies_text}
 ## Every run
 

@@ -120,6 +120,8 @@ def plain_number(value: Any, name: str) -> float:
     try:
         number = float(value)
     except (TypeError, ValueError):
+        if hasattr(value, "unit"):   # (a dimensionless Quantity converts above)
+            raise ValueError(f"{name}={value!r} has unit {value.unit}; {name} takes a plain number") from None
         raise ValueError(f"{name}={value!r} is neither a number nor a Quantity") from None
     if not math.isfinite(number):
         raise ValueError(f"{name}={value!r} is not finite")

@@ -338,12 +338,19 @@ def test_unit_round_trip_and_one_g():
     assert abs(rebound.units.G_SI / const.G.value - 1.0) > 1e-5
 
 
+def scenes_quantity(value, unit):
+    import astropy.units as u
+    return value * u.Unit(unit)
+
+
 def test_scene_errors_name_the_parameter():
     for make, words in ((lambda: scenes.Kepler(a="1 kg"), ("a=", "length")),
                         (lambda: scenes.Kepler(e=-0.1), ("e=-0.1",)),
                         (lambda: scenes.Kepler(m=-1.0), ("m=-1.0",)),
                         (lambda: scenes.Oscillator(omega="1 AU"), ("omega=", "frequency")),
                         (lambda: scenes.Triple(a_outer=2.0), ("a_outer",)),
+                        (lambda: scenes.Kepler(periods=scenes_quantity(2.0, "yr")),
+                         ("periods=", "has unit yr; periods takes a plain number")),
                         (lambda: scenes.make("moon"), ("moon", "kepler")),
                         (lambda: compare.Setting("rk4", 1.0), ("rk4", "ias15")),
                         (lambda: compare.Setting("ias15", -1.0), ("epsilon=-1.0",)),
@@ -532,6 +539,7 @@ def test_a_massless_orbiter_the_help_suggests_runs(tmp_path):
 
 @pytest.mark.parametrize("argv,words", [
     (["compare", "--scene", "kepler", "--a", "1e300 pc"], ["scene kepler: these parameters give no scene"]),
+    (["compare", "--scene", "kepler", "--a", "1e300 AU"], ["no scene to integrate: a value overflows (Numerical result"]),
     (["compare", "--scene", "kepler", "--a", "1e-320 AU"], ["scene kepler: these parameters give no scene"]),
     (["compare", "--scene", "kepler", "--m", "1 AU"], ["argument --m: 1 AU has unit AU, which is not a mass"]),
     (["compare", "--scene", "triple", "--a-inner", "0 AU"], ["argument --a-inner: a_inner=0 AU must be positive"]),
@@ -652,3 +660,15 @@ def test_a_tighter_setting_that_ends_less_accurate_is_named_with_why():
     section = report._tighter_section(rows)
     assert "epsilon_effective" in section and "along the track" in section
     assert report._tighter_section(rows[2:]) == ""
+
+
+def test_a_page_without_matplotlib_links_no_figure(tmp_path, monkeypatch):
+    # The page linked a .png that was never written (hostile trial).
+    monkeypatch.setitem(sys.modules, "matplotlib", None)
+    monkeypatch.setitem(sys.modules, "matplotlib.pyplot", None)
+    scene = scenes.Kepler(e=0.5, periods=0.5)
+    results = compare.run(scene, [compare.Setting("pfvi", 1e-6)], repeats=1, samples=2, workers=1)
+    paths = report.write(results, str(tmp_path))
+    page = (tmp_path / (scene.slug + ".md")).read_text()
+    assert "png" not in paths and "![work-precision diagram]" not in page
+    assert "No plot: matplotlib is not installed" in page
