@@ -228,10 +228,10 @@ def build_parser() -> argparse.ArgumentParser:
                             "4 for fig2 and fig3)")
     paper.add_argument("--step-control", default=None, choices=("seed", "reversible"),
                        help="default: seed for fig1, reversible for fig2 and fig3")
-    paper.add_argument("--epsilon", type=_positive_float, default=1e-6, help="fig2/fig3 tolerance (default 1e-6)")
+    paper.add_argument("--epsilon", type=_positive_float, default=None, help="fig2/fig3 tolerance (default 1e-6)")
     paper.add_argument("--periods", type=_positive_float, default=None,
                        help="fig2: default 1e5; fig3: default 10")
-    paper.add_argument("--samples", type=_positive_int, default=2000, help="fig2: sampled times (default 2000)")
+    paper.add_argument("--samples", type=_positive_int, default=None, help="fig2: sampled times (default 2000)")
     return parser
 
 
@@ -504,6 +504,15 @@ def run_paper(args: argparse.Namespace, argv: List[str]) -> int:
 
     if args.stages is not None and args.stages not in STAGES:
         args.subparser.error(f"argument --stages: {args.stages} is not one of {', '.join(map(str, STAGES))}")
+    # An option the figure does not use is an error, not ignored (as
+    # compare's scene parameters are).
+    uses = {"fig1": (), "fig2": ("epsilon", "periods", "samples"), "fig3": ("epsilon", "periods")}[args.figure]
+    for option in ("epsilon", "periods", "samples"):
+        if getattr(args, option) is not None and option not in uses:
+            args.subparser.error(f"argument --{option}: {args.figure} does not use it (options for {args.figure}: "
+                                 f"{', '.join('--' + o for o in uses) or 'none of --epsilon, --periods, --samples'})")
+    args.epsilon = 1e-6 if args.epsilon is None else args.epsilon
+    args.samples = 2000 if args.samples is None else args.samples
 
     check_output(args.subparser, args.output, [f"figure{args.figure[-1]}{ext}" for ext in (".md", ".json", ".png")])
     if args.figure == "fig1":

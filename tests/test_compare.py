@@ -197,6 +197,10 @@ def test_main_job_is_the_comet_and_its_page_says_who_is_fastest_and_why(tmp_path
     (["compare", "--a", "2 parsecs"], ["--a", "parsecs is not a valid unit. Did you mean parsec?", "units: AU"]),
     (["compare", "--mass", "1 Msun"], ["--mass", "not a parameter of scene 'comet'"]),
     (["compare", "--budget", "0"], ["argument --budget: '0' must be positive"]),
+    # A figure's unused options were silently ignored (hostile trial).
+    (["paper", "fig1", "--epsilon", "1e-3"], ["argument --epsilon: fig1 does not use it"]),
+    (["paper", "fig1", "--periods", "1"], ["argument --periods: fig1 does not use it"]),
+    (["paper", "fig3", "--samples", "3"], ["argument --samples: fig3 does not use it", "--epsilon, --periods"]),
 ])
 def test_argument_errors_name_the_argument(argv, words, capsys):
     with pytest.raises(SystemExit) as stop:
