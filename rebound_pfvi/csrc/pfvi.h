@@ -37,6 +37,11 @@
 // (PFVI_NO_CLONES builds the baseline path alone, without the AVX2 clones:
 // tests/test_vector_paths.py compares the two builds' trajectories.)
 typedef double pfvi_lanes __attribute__((vector_size(4*sizeof(double))));
+// A comparison's result on lanes (all bits set where true), and yes in the
+// lanes where the mask m is set, no elsewhere (a macro: a function returning
+// vectors would change its ABI between the clones).
+typedef long long pfvi_lane_mask __attribute__((vector_size(4*sizeof(long long))));
+#define lanes_where(m, yes, no) ((pfvi_lanes)(((pfvi_lane_mask)(yes) & (m)) | ((pfvi_lane_mask)(no) & ~(m))))
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__) && !defined(PFVI_NO_CLONES)
 #define PFVI_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
 #else

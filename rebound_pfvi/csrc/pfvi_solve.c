@@ -58,15 +58,11 @@
 // elimination A[i][j] -= g A[k][j] is made in every lane, the result kept
 // only in the lanes j > k (the others, L's entries and A[i][k], as they
 // were): each kept lane is the scalar loop's operation, the same bits.
-typedef long long lane_mask __attribute__((vector_size(4*sizeof(long long))));
 typedef char lu_rows_are_two_vectors[(LU_MAX == 8) ? 1 : -1];
 
-// yes in the lanes where the mask m is set, no elsewhere (a macro: a
-// function returning vectors would change its ABI between the clones)
-#define lanes_where(m, yes, no) ((pfvi_lanes)(((lane_mask)(yes) & (m)) | ((lane_mask)(no) & ~(m))))
 
 static inline __attribute__((always_inline)) int lu_factor(int n, double (*A)[LU_MAX], int* piv, double* inverse){
-    const lane_mask column_lo = {0, 1, 2, 3}, column_hi = {4, 5, 6, 7};
+    const pfvi_lane_mask column_lo = {0, 1, 2, 3}, column_hi = {4, 5, 6, 7};
     for (int k=0; k<n; k++){
         // (the pivot's magnitude carried beside its row: the same
         // comparisons as fabs(A[i][k]) > fabs(A[p][k]))
@@ -90,8 +86,8 @@ static inline __attribute__((always_inline)) int lu_factor(int n, double (*A)[LU
             return 0;
         }
         inverse[k] = 1./A[k][k];
-        const lane_mask kk = {k, k, k, k};
-        const lane_mask right_lo = column_lo > kk, right_hi = column_hi > kk;
+        const pfvi_lane_mask kk = {k, k, k, k};
+        const pfvi_lane_mask right_lo = column_lo > kk, right_hi = column_hi > kk;
         for (int i=k+1; i<n; i++){
             const double g = A[i][k]*inverse[k];
             const pfvi_lanes G = {g, g, g, g};
@@ -830,15 +826,15 @@ double pfvi_solve_change(const double (*y)[3], const double (*yn)[3], const doub
     const double* const a = &y[0][0];
     const double* const b = &yn[0][0];
     const int n = 3*(s - 1);
-    const lane_mask magnitude = {INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX};
+    const pfvi_lane_mask magnitude = {INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX};
     pfvi_lanes most = {0., 0., 0., 0.};
-    lane_mask nan = {0, 0, 0, 0};
+    pfvi_lane_mask nan = {0, 0, 0, 0};
     int l = 0;
     for (; l + 4 <= n; l+=4){
         pfvi_lanes x, xn;
         memcpy(&x, a + l, sizeof(x));
         memcpy(&xn, b + l, sizeof(xn));
-        const pfvi_lanes d = (pfvi_lanes)((lane_mask)(xn - x) & magnitude);   // fabs: the sign bit cleared
+        const pfvi_lanes d = (pfvi_lanes)((pfvi_lane_mask)(xn - x) & magnitude);   // fabs: the sign bit cleared
         most = lanes_where(d > most, d, most);
         nan |= (d != d);
     }

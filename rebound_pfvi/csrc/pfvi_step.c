@@ -165,7 +165,6 @@ static inline __attribute__((always_inline)) pfvi_lanes stage_lanes(const double
 PFVI_VECTOR_CLONES
 static void weak_pull_stages(const double (*xi)[3], const double (*xj)[3], const double (*a)[3], int s,
         const double shift[3], double Gm, double softening2, const double* weights, struct weak_pull* out){
-    typedef long long lanes_mask __attribute__((vector_size(4*sizeof(long long))));
     pfvi_lanes A2 = {0., 0., 0., 0.}, F2 = {0., 0., 0., 0.};
     double D[3] = {0., 0., 0.}, Da[3] = {0., 0., 0.};
     for (int k0=0; k0<s; k0+=4){
@@ -189,9 +188,8 @@ static void weak_pull_stages(const double (*xi)[3], const double (*xj)[3], const
         const pfvi_lanes a2 = al[0]*al[0] + al[1]*al[1] + al[2]*al[2];
         const pfvi_lanes f2 = rest[0]*rest[0] + rest[1]*rest[1] + rest[2]*rest[2];
         // (x > y ? x : y) lane by lane.
-        const lanes_mask ma = (a2 > A2), mf = (f2 > F2);
-        A2 = (pfvi_lanes)((ma & (lanes_mask)a2) | (~ma & (lanes_mask)A2));
-        F2 = (pfvi_lanes)((mf & (lanes_mask)f2) | (~mf & (lanes_mask)F2));
+        A2 = lanes_where(a2 > A2, a2, A2);
+        F2 = lanes_where(f2 > F2, f2, F2);
         const pfvi_lanes w = {weights[k0], weights[k1], weights[k2], weights[k3]};
         for (int c=0; c<3; c++){
             const pfvi_lanes p = w*rest[c], pa = w*al[c];
