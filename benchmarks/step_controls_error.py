@@ -3,7 +3,7 @@ orbits of a Kepler pair (m = 1e-3) against IAS15 at 1e-13, with the steps
 taken, for 'seed' (K&V), 'reversible' and 'symmetric' (the default). The
 figures in help(sim.integrator)'s step_control text come from here.
 
-    python -P benchmarks/step_controls_error.py     # about 2 minutes (the symmetric s = 2 runs)
+    python -P benchmarks/step_controls_error.py     # a few seconds
 """
 import math
 import sys

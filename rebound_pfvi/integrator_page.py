@@ -28,11 +28,14 @@ WHEN = """\
 - **MEGNO and Lyapunov maps**, above all of eccentric systems: variational
   particles follow the tangent map of pfvi's own step (docs/megno.md has
   the map against IAS15 and WHFast).
-- **Not** for: collisions (not detected inside a step; use IAS15 or
-  MERCURIUS/TRACE), planetary systems at moderate accuracy (WHFast, with
-  its corrector, is faster at 1e-6), very short accurate runs (BS is often
-  faster), and forces that jump within a step (a tree code's cells: the
-  steps are kept but counted in ``n_unresolved``).
+- **Collisions** are found inside a step (the step is retaken to the
+  contact, counted in ``n_contact_steps``; docs/collisions.md).
+- **Not** for: planetary systems of low eccentricity at moderate accuracy
+  (WHFast with its corrector is faster to 1e-6 AU on the triple and on
+  Mercury with GR, to 1e-4 AU on the outer solar system), pure Kepler pairs
+  (WHFast is exact there), very short accurate runs (BS is often faster),
+  and forces that jump within a step (a tree code's cells: the steps are
+  kept but counted in ``n_unresolved``).
 """
 
 #: The papers the description cites, in full.
@@ -47,6 +50,11 @@ REFERENCES = (
     'M. Antonana, J. Makazaga and A. Murua, "Reducing and monitoring round-off error '
     'propagation for symplectic implicit Runge-Kutta schemes", Numerical Algorithms (2017), '
     "doi:10.1007/s11075-017-0287-z (IRKGL16: the stage solve's stop).",
+    'M. Antonana, J. Makazaga and A. Murua, "Efficient implementation of symplectic implicit '
+    'Runge-Kutta schemes with simplified Newton iterations", Numerical Algorithms 78 (2018) 63-86 '
+    "(the stage solve's Newton iteration).",
+    'E. Hairer, R. I. McLachlan and A. Razakarivony, "Achieving Brouwer\'s law with implicit '
+    'Runge-Kutta methods", BIT Numerical Mathematics 48 (2008) 231-243 (round-off as a random walk).',
     'P. Hut, J. Makino and S. McMillan, "Building a better leapfrog", ApJ 443 (1995) L93 '
     "(the 'reversible' control).",
 )
