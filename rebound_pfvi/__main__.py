@@ -12,6 +12,7 @@ import shlex
 import sys
 import threading
 import time
+import warnings
 from typing import TYPE_CHECKING, Any, Dict, List, Optional, Sequence, TextIO
 
 from . import scenes as scenes_module
@@ -467,8 +468,10 @@ def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv:
     print(f"{scene.describe()}: {len(settings)} runs, best of {args.repeats}", flush=True)
     bar = Progress(len(settings))
     try:
-        results = compare.run(scene, settings, repeats=args.repeats, samples=args.samples, workers=args.workers,
-                              scheduler=scheduler, progress=bar, budget=args.budget)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", compare.NoRunFinished)  # said below, as the error it is here
+            results = compare.run(scene, settings, repeats=args.repeats, samples=args.samples,
+                                  workers=args.workers, scheduler=scheduler, progress=bar, budget=args.budget)
     finally:
         bar.close()
         if scheduler is not None:
@@ -488,6 +491,9 @@ def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv:
     if warned:
         print(f"REBOUND warned in {len(warned)} run(s), explained in the page's Warnings section:")
         print(report.warnings_section(warned))
+    if results.failure and not results.interrupted:  # nothing measured: the page shows why, the command fails
+        print(f"error: {results.failure}; each run's verdict: {paths['md']}", file=sys.stderr)
+        return 1
     print("Fastest to a position error (wall time, best of the sweep):")
     length = report.length_unit(results)
     for sentence in report.conclusions(results, results.reference.get("uncertainty", 0.0), length):

@@ -344,6 +344,10 @@ def judge(scene: Scene, run: Run) -> Tuple[str, str]:
     return runs.judge(run, getattr(scene, "tolerance", verdict.DEFAULT))
 
 
+class NoRunFinished(RuntimeWarning):
+    """Issued by :func:`run` when no run of the sweep got to its end with finite errors."""
+
+
 @dataclass
 class Results:
     """The runs of a sweep and what is needed to read them."""
@@ -363,6 +367,20 @@ class Results:
     @property
     def finished(self) -> int:
         return len(self.rows)
+
+    @property
+    def failure(self) -> str:
+        """"" when some run got to its end with finite errors (what the
+        tables, the plot and the conclusions read); else one line saying that
+        no run did, with what became of them: "no run finished with finite
+        errors (30 crashed, 4 refused)"."""
+        if not self.rows or any(r.status == "ok" for r in self.rows):
+            return ""
+        what: Dict[str, int] = {}
+        for r in self.rows:
+            word = "diverged" if r.status.startswith("diverged") else r.verdict or r.status.split(":")[0]
+            what[word] = what.get(word, 0) + 1
+        return f"no run finished with finite errors ({', '.join(f'{n} {w}' for w, n in what.items())})"
 
     def verdict_counts(self) -> Dict[str, Dict[str, int]]:
         """{line: {verdict: runs}} (a line is an integrator with its options, e.g. "pfvi s=4 phase")."""
@@ -424,6 +442,14 @@ def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int
     ("over budget"), and a run whose process dies is "crashed".
     Ctrl-C stops the sweep and returns the finished runs with
     ``interrupted=True``.
+
+    A sweep in which no run got to its end with finite errors (all refused,
+    crashed, over budget or diverged: e.g. an oscillator with omega = 1e300
+    /yr) is still returned, so that :func:`rebound_pfvi.report.write` can
+    write every run's verdict; its ``failure`` says so in one line (it is ""
+    otherwise), and a :class:`NoRunFinished` warning with the same words is
+    issued (``warnings.simplefilter("error", NoRunFinished)`` makes it an
+    exception). The command line writes the page and exits with status 1.
     """
     settings = list(settings if settings is not None else default_settings(scene))
     if not settings:
@@ -471,5 +497,11 @@ def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int
     except KeyboardInterrupt:
         interrupted = True
     rows = [done[i] for i in sorted(done)]
-    return Results(scene, settings, rows, reference, int(repeats), int(samples), workers, where,
-                   time.perf_counter() - tick, interrupted, budget)
+    results = Results(scene, settings, rows, reference, int(repeats), int(samples), workers, where,
+                      time.perf_counter() - tick, interrupted, budget)
+    if results.failure:
+        import warnings
+
+        warnings.warn(f"{scene.name}: {results.failure}; each run's verdict is in results.rows",
+                      NoRunFinished, stacklevel=2)
+    return results

@@ -414,7 +414,7 @@ def write(results: Results, output: str, basename: Optional[str] = None,
         png_note = "\n(No plot: matplotlib is not installed; pip install 'rebound_pfvi[plot]'.)\n"
     m = data["machine"]
     status = (f"**Interrupted**: {results.finished} of {len(results.settings)} runs finished.\n\n"
-              if results.interrupted else "")
+              if results.interrupted else f"**Nothing measured**: {results.failure}.\n\n" if results.failure else "")
     floor = results.reference.get("uncertainty", 0.0)
     length = length_unit(results)
     bodies = bodies_section(results.rows)
