@@ -15,6 +15,7 @@ import time
 import warnings
 from typing import TYPE_CHECKING, Any, Dict, List, Optional, Sequence, TextIO
 
+from . import checks, units
 from . import scenes as scenes_module
 
 if TYPE_CHECKING:
@@ -44,45 +45,28 @@ SCENE_OPTIONS = {
 }
 
 
-def _number(name):
-    def parse(text):
+def _argument(check: Any, kind: str) -> Any:
+    """An argparse type from a check that the Python API makes too
+    (:mod:`rebound_pfvi.checks`, :mod:`rebound_pfvi.units`): the same rule,
+    its error without the Python argument's name (argparse names the option)."""
+    def parse(text: str) -> Any:
         try:
-            return float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    parse.__name__ = name
-    return parse
-
-
-def _quantity(kind):
-    def parse(text):
-        from .units import parse as parse_quantity, to_scene
-
-        try:
-            value = parse_quantity(text, kind, "value")
-            to_scene(value, kind, "value")  # the right dimension, finite
+            return check(text, "value")
         except ValueError as error:
             raise argparse.ArgumentTypeError(str(error).replace("value: ", "").replace("value=", "")) from None
-        return value
     parse.__name__ = kind
     return parse
 
 
-def _positive_int(text):
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{value} must be at least 1")
-    return value
+def _quantity(kind: str) -> Any:
+    from .units import parse
+
+    return _argument(lambda text, name: parse(text, kind, name), kind)
 
 
-def _positive_float(text):
-    value = _number("number")(text)
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"{text!r} must be positive")
-    return value
+_number = _argument(units.plain_number, "number")
+_positive_int = _argument(checks.positive_int, "integer")
+_positive_float = _argument(checks.positive_number, "number")
 
 
 def _families(text):
@@ -172,7 +156,7 @@ def build_parser() -> argparse.ArgumentParser:
             compare.add_argument(option, action="store_const", const=False, default=None,
                                  help=f"{text} [{', '.join(scenes)}]")
             continue
-        parse = _number(kind) if kind == "number" else str if kind == "epoch" else _quantity(kind)
+        parse = _number if kind == "number" else str if kind == "epoch" else _quantity(kind)
         compare.add_argument(option, type=parse, default=None, help=f"{text} [{', '.join(scenes)}]")
     compare.add_argument("--integrators", type=_families, default=None,
                          help="comma-separated families to run (default: all that apply to the scene)")

@@ -39,7 +39,7 @@ import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
-from . import DEFAULTS, runner, runs, verdict
+from . import DEFAULTS, checks, runner, runs, verdict
 from .integrators import FAMILIES, WHFAST_CORRECTED, pfvi_label, pfvi_options
 from .integrators import configure as configure_integrator
 from .runs import ProgressCallback, Run
@@ -430,14 +430,14 @@ class Results:
 
 def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int = 3, samples: int = 100,
         workers: Optional[int] = None, scheduler: Any = None,
-        progress: Optional[ProgressCallback] = None, budget: Optional[float] = None) -> Results:
+        progress: Optional[ProgressCallback] = None, budget: Any = None) -> Results:
     """Runs a sweep; returns :class:`Results` (runs in the order of `settings`).
 
     workers: processes of the local pool (default: the machine's cores; 1 runs
     here). scheduler: the address of a Dask distributed scheduler, or a
     ``distributed.Client``. progress(done, total, run) is called after each run.
-    budget: seconds of wall time per setting (see :func:`run_setting`; None:
-    no limit); in the local pool a run still busy
+    budget: wall time per setting, in seconds or as a time Quantity (``5 *
+    u.s``; see :func:`run_setting`; None: no limit); in the local pool a run still busy
     :data:`rebound_pfvi.runner.GRACE_SECONDS` after its budget is killed
     ("over budget"), and a run whose process dies is "crashed".
     Ctrl-C stops the sweep and returns the finished runs with
@@ -454,19 +454,15 @@ def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int
     settings = list(settings if settings is not None else default_settings(scene))
     if not settings:
         raise ValueError("settings: the sweep is empty (no integrator family applies to this scene)")
-    if int(repeats) < 1:
-        raise ValueError(f"repeats={repeats!r} must be at least 1")
-    if int(samples) < 1:
-        raise ValueError(f"samples={samples!r} must be at least 1")
-    if workers is not None and int(workers) < 1:
-        raise ValueError(f"workers={workers!r} must be at least 1")
-    if budget is not None and not (isinstance(budget, (int, float)) and budget > 0 and math.isfinite(budget)):
-        raise ValueError(f"budget={budget!r} must be a positive number of seconds (or None)")
+    # The command line's checks (rebound_pfvi.checks), with the arguments' names.
+    repeats, samples = checks.positive_int(repeats, "repeats"), checks.positive_int(samples, "samples")
+    workers = None if workers is None else checks.positive_int(workers, "workers")
+    budget = None if budget is None else checks.seconds(budget, "budget")
     reference = scene.reference()
     # The hard limit: a run still busy GRACE_SECONDS after its budget is killed (in a worker process;
     # nothing can kill a run in this one).
     limit = None if budget is None else budget + runner.GRACE_SECONDS
-    tasks = [runner.Task(run_setting, (scene, s, reference, int(repeats), int(samples), budget), limit)
+    tasks = [runner.Task(run_setting, (scene, s, reference, repeats, samples, budget), limit)
              for s in settings]
     done: Dict[int, Run] = {}
     interrupted = False
@@ -497,7 +493,7 @@ def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int
     except KeyboardInterrupt:
         interrupted = True
     rows = [done[i] for i in sorted(done)]
-    results = Results(scene, settings, rows, reference, int(repeats), int(samples), workers, where,
+    results = Results(scene, settings, rows, reference, repeats, samples, workers, where,
                       time.perf_counter() - tick, interrupted, budget)
     if results.failure:
         import warnings

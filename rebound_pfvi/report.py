@@ -11,6 +11,8 @@ import os
 import platform
 from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Optional
 
+from .checks import file_name
+
 if TYPE_CHECKING:
     import pathlib
 
@@ -386,10 +388,10 @@ def _tighter_section(rows: List[Run]) -> str:
 def write(results: Results, output: str, basename: Optional[str] = None,
           command: Optional[str] = None) -> Dict[str, str]:
     """Writes <basename>.json, .csv, .md and .png (if matplotlib is installed)
-    into `output` (basename: the scene's slug, e.g. kepler-e0.95); returns the
-    paths written."""
+    into `output` (basename: the scene's slug, e.g. kepler-e0.95; a name
+    without a folder, ValueError otherwise); returns the paths written."""
+    base = os.path.join(output, file_name(results.scene.slug if basename is None else basename, "basename"))
     os.makedirs(output, exist_ok=True)
-    base = os.path.join(output, basename or results.scene.slug)
     data = results.to_dict()
     data["machine"] = machine()
     data["command"] = command

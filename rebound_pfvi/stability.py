@@ -29,7 +29,7 @@ import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
-from . import runner, runs, scenes, verdict
+from . import checks, runner, runs, scenes, verdict
 from . import DEFAULTS
 from .integrators import configure as configure_integrator, pfvi_label, pfvi_options
 from .runs import ProgressCallback, Run
@@ -653,10 +653,13 @@ def what_happened(row: Run) -> str:
 
 
 def run_all(case_names: Optional[Sequence[str]] = None, configs: Optional[Sequence[Config]] = None,
-            budget: float = 60.0, workers: int = 2, progress: Optional[ProgressCallback] = None) -> Report:
+            budget: Any = 60.0, workers: int = 2, progress: Optional[ProgressCallback] = None) -> Report:
     """Every case x every config, each run in a process of its own (rebound_pfvi.runner);
     references first. progress(done, total, run) is called as each run ends (before it is judged:
-    the runs are judged once all have ended)."""
+    the runs are judged once all have ended). budget: seconds of integration per run, or a time
+    Quantity (``60 * u.s``)."""
+    # The command line's checks (rebound_pfvi.checks), with the arguments' names.
+    budget, workers = checks.seconds(budget, "budget"), checks.positive_int(workers, "workers")
     table = cases()
     names = list(case_names) if case_names else list(table)
     for name in names:

@@ -1,11 +1,13 @@
 """Issue 42, the Python boundary (third hostile trial): the Python API checks
 what the command line checks, with the same checks, and errors name the
 argument or field and the value at fault."""
+import math
 import warnings
 
+import astropy.units as u
 import pytest
 
-from rebound_pfvi import compare, report, scenes
+from rebound_pfvi import compare, demo, paper, report, scenes, stability, units
 from rebound_pfvi.__main__ import main
 
 #: Sweeps in which no run gets to its end: every run crashes (an overflow) or is refused (a force that is not finite).
@@ -41,3 +43,48 @@ def test_compare_run_says_when_no_run_finished():
         fine = compare.run(scenes.Kepler(periods=1), [compare.Setting("ias15", 1e-5)], repeats=1, samples=2,
                            workers=1)
     assert fine.failure == ""
+
+
+ONE = [compare.Setting("ias15", 1e-5)]
+
+
+def kepler_run(**keywords):
+    return compare.run(scenes.Kepler(periods=1), ONE, **{"repeats": 1, "samples": 2, "workers": 1, **keywords})
+
+
+# Each refused before anything runs (demo.run_demo(nan) integrated for ever; repeats=2.5 ran 2 repeats).
+@pytest.mark.parametrize("call, message", [
+    (lambda: demo.run_demo(math.nan), "orbits=nan is not an integer"),
+    (lambda: demo.run_demo(2.5), "orbits=2.5 is not an integer"),
+    (lambda: demo.run_demo(0), "orbits=0 must be at least 1"),
+    (lambda: kepler_run(repeats=2.5), "repeats=2.5 is not an integer"),
+    (lambda: kepler_run(samples=True), "samples=True is not an integer"),
+    (lambda: kepler_run(workers=0), "workers=0 must be at least 1"),
+    (lambda: kepler_run(budget=5 * u.m), "budget=5 m has unit m, which is not a time; allowed: yr, day, d, s, h"),
+    (lambda: kepler_run(budget=-1 * u.s), "budget=-1 s must be positive"),
+    (lambda: kepler_run(budget=math.inf), "budget=inf is not finite"),
+    (lambda: stability.run_all(["kepler-e0.99"], budget=math.nan), "budget=nan is not finite"),
+    (lambda: stability.run_all(["kepler-e0.99"], workers=1.5), "workers=1.5 is not an integer"),
+    (lambda: units.parse("1 AU", "time", "duration"), "duration=1 AU has unit AU, which is not a time"),
+    (lambda: units.parse("2 kg", "length", "a"), "a=2 kg has unit kg, which is not a length"),
+    (lambda: paper.figure2_rows(periods=math.nan), "periods=nan is not finite"),
+    (lambda: paper.figure2_rows(periods=1, samples=0), "samples=0 must be at least 1"),
+], ids=lambda v: v if isinstance(v, str) else "")
+def test_the_python_api_makes_the_command_lines_checks(call, message):
+    with pytest.raises(ValueError) as refused:
+        call()
+    assert str(refused.value) == message or str(refused.value).startswith(message + ";"), str(refused.value)
+
+
+def test_a_budget_may_be_a_time_quantity():
+    assert kepler_run(budget=2 * u.min).budget == 120.0
+    assert units.parse("3 day", "time", "t").to_value(u.day) == 3.0
+
+
+@pytest.mark.parametrize("basename", ["../x", "a/b", "..", "", "/tmp/x"])
+def test_a_page_name_with_a_folder_is_refused_and_nothing_written(basename, tmp_path):
+    results = kepler_run()
+    with pytest.raises(ValueError, match=r"basename=.* is not a file name: give a name without a folder"):
+        report.write(results, str(tmp_path / "out"), basename=basename)
+    assert list(tmp_path.iterdir()) == []
+    assert set(report.write(results, str(tmp_path / "out"), basename="mine")) == {"json", "csv", "md", "png"}
