@@ -69,35 +69,38 @@ _positive_int = _argument(checks.positive_int, "integer")
 _positive_float = _argument(checks.positive_number, "number")
 
 
-def _families(text):
+def _names(allowed: Any, what: str, lower: bool = False) -> Any:
+    """An argparse type for a comma-separated list of names: checks.names's rule (each allowed, each once)."""
+    def check(text: str, name: str) -> List[str]:
+        given = [n.strip().lower() if lower else n.strip() for n in text.split(",") if n.strip()]
+        try:
+            return checks.names(given, allowed(), name, what)
+        except ValueError as error:
+            raise ValueError(f"{error} (comma-separated)") from None
+    return _argument(check, "names")
+
+
+def _compare_families() -> Any:
     from .compare import FAMILIES
 
-    names = list(dict.fromkeys(n.strip().lower() for n in text.split(",") if n.strip()))  # each once
-    bad = [n for n in names if n not in FAMILIES]
-    if bad or not names:
-        raise argparse.ArgumentTypeError(f"{', '.join(bad) or repr(text)} not an integrator family; "
-                                         f"allowed: {', '.join(FAMILIES)} (comma-separated)")
-    return names
+    return FAMILIES
 
 
-def _case_names(text):
+def _stability_cases() -> Any:
     from .stability import cases
 
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    bad = [n for n in names if n not in cases()]
-    if bad or not names:
-        raise argparse.ArgumentTypeError(f"{', '.join(bad) or repr(text)} not a case; allowed: "
-                                         f"{', '.join(cases())} (comma-separated)")
-    return names
+    return cases()
 
 
-def _stability_families(text):
-    names = [n.strip().lower() for n in text.split(",") if n.strip()]
-    bad = [n for n in names if n not in ("pfvi", "ias15", "whfast")]
-    if bad or not names:
-        raise argparse.ArgumentTypeError(f"{', '.join(bad) or repr(text)} not an integrator; allowed: "
-                                         "pfvi, ias15, whfast (comma-separated)")
-    return names
+def _stability_integrators() -> Any:
+    from .stability import FAMILIES
+
+    return FAMILIES
+
+
+_families = _names(_compare_families, "an integrator family", lower=True)
+_case_names = _names(_stability_cases, "a case")
+_stability_families = _names(_stability_integrators, "an integrator", lower=True)
 
 
 def version_text() -> str:

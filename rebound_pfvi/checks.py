@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numbers
 import os
-from typing import Any
+from typing import Any, Iterable, List
 
 from . import units
 
@@ -52,6 +52,21 @@ def seconds(value: Any, name: str) -> float:
             raise ValueError(f"{name}={units.show(value)} must be positive")
         return number
     return positive_number(value, name)
+
+
+def names(values: Iterable[str], allowed: Iterable[str], name: str, what: str) -> List[str]:
+    """`values` as a list, each one of `allowed` and each once: a name not
+    allowed, or one given twice, is refused naming it (`what` says what a name
+    is: "a case"), as is an empty list."""
+    allowed, values = list(allowed), list(values)
+    bad = [v for v in values if v not in allowed]
+    if bad or not values:
+        raise ValueError(f"{name}: {', '.join(map(str, bad)) + ' not ' + what if bad else 'none given'}; "
+                         f"allowed: {', '.join(allowed)}")
+    twice = list(dict.fromkeys(v for i, v in enumerate(values) if v in values[:i]))
+    if twice:
+        raise ValueError(f"{name}: {', '.join(twice)} given twice; give each once")
+    return values
 
 
 def file_name(value: Any, name: str) -> str:

@@ -146,10 +146,8 @@ def default_settings(scene: Scene, size: str = "quick",
     scene's own (``scene.sweep``, the solar system's). `families` restricts it."""
     if size not in ("quick", "full"):
         raise ValueError(f"size={size!r} is not valid; allowed: quick, full")
-    families = tuple(families or scene.families)
-    for family in families:
-        if family not in FAMILIES:
-            raise ValueError(f"family={family!r} is not an integrator family; allowed: {', '.join(FAMILIES)}")
+    families = tuple(scene.families if not families else
+                     checks.names(families, FAMILIES, "families", "an integrator family"))
     settings = []
     for family in families:
         if family not in scene.families:

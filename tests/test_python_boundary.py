@@ -88,3 +88,34 @@ def test_a_page_name_with_a_folder_is_refused_and_nothing_written(basename, tmp_
         report.write(results, str(tmp_path / "out"), basename=basename)
     assert list(tmp_path.iterdir()) == []
     assert set(report.write(results, str(tmp_path / "out"), basename="mine")) == {"json", "csv", "md", "png"}
+
+
+# A name given twice ran twice (stability --cases a,a; --integrators pfvi,pfvi); compare's --integrators
+# dropped the second silently. Now refused, naming it, by the command line and the Python functions alike.
+@pytest.mark.parametrize("argv, message", [
+    (["stability", "--cases", "kepler-e0.99,flyby-e1,kepler-e0.99"],
+     "argument --cases: kepler-e0.99 given twice; give each once (comma-separated)"),
+    (["stability", "--integrators", "pfvi,ias15,PFVI"],
+     "argument --integrators: pfvi given twice; give each once (comma-separated)"),
+    (["compare", "--integrators", "ias15,ias15"],
+     "argument --integrators: ias15 given twice; give each once (comma-separated)"),
+])
+def test_a_name_given_twice_is_an_argument_error(argv, message, capsys, tmp_path):
+    with pytest.raises(SystemExit) as stop:
+        main([*argv, "--output", str(tmp_path / "out")])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1].endswith(message)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: stability.run_all(["flyby-e1", "flyby-e1"]), "case_names: flyby-e1 given twice; give each once"),
+    (lambda: stability.run_all(["nope"]), "case_names: nope not a case; allowed: kepler-e0.99, "),
+    (lambda: stability.default_configs(["whfast", "whfast"]), "integrators: whfast given twice; give each once"),
+    (lambda: compare.default_settings(scenes.Kepler(), families=["bs", "bs"]),
+     "families: bs given twice; give each once"),
+], ids=["run_all", "unknown", "default_configs", "default_settings"])
+def test_the_python_functions_refuse_a_name_given_twice(call, message):
+    with pytest.raises(ValueError) as refused:
+        call()
+    assert str(refused.value).startswith(message), str(refused.value)
