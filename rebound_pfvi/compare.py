@@ -388,8 +388,9 @@ class Results:
         """Everything the sweep found, as JSON-ready data (the page's .json)."""
         from .units import REBOUND_UNITS
 
-        own = getattr(self.scene, "unit_names", True) is None
-        unit_names = ("the simulation's own",) * 3 if own else REBOUND_UNITS
+        unit_names = getattr(self.scene, "unit_names", REBOUND_UNITS)  # a custom simulation's: its own
+        if unit_names is None:
+            unit_names = ("the simulation's own",) * 3
         return {"scene": self.scene.name, "params": self.scene.params, "description": self.scene.describe(),
                 "t_end": self.scene.t_end, "period": self.scene.period,
                 "units": {"length": unit_names[0], "time": unit_names[1], "mass": unit_names[2],
@@ -418,10 +419,11 @@ class Results:
         t["energy_error_max"] = [r.energy_error_max for r in ok]
         t["energy_error_final"] = [r.energy_error_final for r in ok]
         errors = [r.position_error for r in ok]
-        if getattr(self.scene, "unit_names", True) is None:  # a custom simulation in its own units
+        in_au = getattr(self.scene, "length_in_au", 1.0)  # a custom simulation's: its length unit's
+        if in_au is None:  # a custom simulation without sim.units: its own units
             t["position_error"] = errors
         else:
-            t["position_error"] = errors << u.AU
+            t["position_error"] = (errors << u.AU) * in_au
             t["position_error_km"] = t["position_error"].to(u.km)
         return t
 

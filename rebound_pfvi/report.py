@@ -45,7 +45,7 @@ def _knob(row: Run) -> str:
 
 def length_unit(results: Results) -> str:
     """How the page names the position error's unit."""
-    return "AU" if getattr(results.scene, "unit_names", True) is not None else "sim. length unit"
+    return str(getattr(results.scene, "length_unit", "AU"))
 
 
 def markdown_table(rows: Iterable[Run], length: str = "AU") -> str:

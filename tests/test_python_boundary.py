@@ -119,3 +119,46 @@ def test_the_python_functions_refuse_a_name_given_twice(call, message):
     with pytest.raises(ValueError) as refused:
         call()
     assert str(refused.value).startswith(message), str(refused.value)
+
+
+def _two_bodies(triple):
+    import rebound
+
+    sim = rebound.Simulation()
+    if triple is not None:
+        sim.units = triple
+    mass, a = (1.0, 1.0) if triple is None else ((1 * u.Msun).to_value(triple[2]), (1 * u.AU).to_value(triple[0]))
+    sim.add(m=mass)
+    sim.add(m=1e-3 * mass, a=a, e=0.1)
+    sim.move_to_com()
+    return sim
+
+
+# Quantities were taken only where sim.units was AU, yr, Msun; every other unit set was called "no units set".
+@pytest.mark.parametrize("triple, length", [(("m", "s", "kg"), "m"), (("km", "day", "Msun"), "km"),
+                                            (("AU", "yr", "Msun"), "AU")])
+def test_a_custom_scene_converts_quantities_to_the_simulations_units(triple, length, tmp_path):
+    scene = scenes.Custom(_two_bodies(triple), 2 * u.yr, period=1 * u.day, label="mine")
+    assert scene.duration == pytest.approx((2 * u.yr).to_value(triple[1]), rel=1e-15)
+    assert scene.period == pytest.approx((1 * u.day).to_value(triple[1]), rel=1e-15)
+    assert scenes.Custom(_two_bodies(triple), "3 h").duration == pytest.approx((3 * u.h).to_value(triple[1]))
+    with pytest.raises(ValueError, match=r"^duration=2 m has unit m, which is not a time"):
+        scenes.Custom(_two_bodies(triple), 2 * u.m)
+    if length == "km":  # the page and the table in the simulation's length unit
+        results = compare.run(scene, ONE, repeats=1, samples=2, workers=1)
+        report.write(results, str(tmp_path))
+        text = (tmp_path / "mine.md").read_text()
+        assert " km. Energy:" in text and "- To 1e-02 km: IAS15" in text
+        assert results.to_dict()["units"]["length"] == "km"
+        table = results.table()
+        assert table["position_error_km"][0].to_value(u.km) == pytest.approx(results.rows[0].position_error)
+
+
+def test_a_quantity_for_a_simulation_without_units_says_how_to_set_them():
+    with pytest.raises(ValueError) as refused:
+        scenes.Custom(_two_bodies(None), 1 * u.yr)
+    assert str(refused.value) == (
+        "duration=1 yr: this simulation has no units (sim.units is not set), so a Quantity cannot be converted; "
+        "give a plain number in its time unit, or set its units before adding particles, e.g. "
+        "sim.units = ('AU', 'yr', 'Msun') or ('m', 's', 'kg')")
+    assert scenes.Custom(_two_bodies(None), 2.0).describe().endswith("in its own units")
