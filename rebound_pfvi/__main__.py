@@ -12,8 +12,10 @@ import shlex
 import sys
 import threading
 import time
+import warnings
 from typing import TYPE_CHECKING, Any, Dict, List, Optional, Sequence, TextIO
 
+from . import checks, units
 from . import scenes as scenes_module
 
 if TYPE_CHECKING:
@@ -43,76 +45,62 @@ SCENE_OPTIONS = {
 }
 
 
-def _number(name):
-    def parse(text):
+def _argument(check: Any, kind: str) -> Any:
+    """An argparse type from a check that the Python API makes too
+    (:mod:`rebound_pfvi.checks`, :mod:`rebound_pfvi.units`): the same rule,
+    its error without the Python argument's name (argparse names the option)."""
+    def parse(text: str) -> Any:
         try:
-            return float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    parse.__name__ = name
-    return parse
-
-
-def _quantity(kind):
-    def parse(text):
-        from .units import parse as parse_quantity, to_scene
-
-        try:
-            value = parse_quantity(text, kind, "value")
-            to_scene(value, kind, "value")  # the right dimension, finite
+            return check(text, "value")
         except ValueError as error:
             raise argparse.ArgumentTypeError(str(error).replace("value: ", "").replace("value=", "")) from None
-        return value
     parse.__name__ = kind
     return parse
 
 
-def _positive_int(text):
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{value} must be at least 1")
-    return value
+def _quantity(kind: str) -> Any:
+    from .units import parse
+
+    return _argument(lambda text, name: parse(text, kind, name), kind)
 
 
-def _positive_float(text):
-    value = _number("number")(text)
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"{text!r} must be positive")
-    return value
+_number = _argument(units.plain_number, "number")
+_positive_int = _argument(checks.positive_int, "integer")
+_positive_float = _argument(checks.positive_number, "number")
 
 
-def _families(text):
+def _names(allowed: Any, what: str, lower: bool = False) -> Any:
+    """An argparse type for a comma-separated list of names: checks.names's rule (each allowed, each once)."""
+    def check(text: str, name: str) -> List[str]:
+        given = [n.strip().lower() if lower else n.strip() for n in text.split(",") if n.strip()]
+        try:
+            return checks.names(given, allowed(), name, what)
+        except ValueError as error:
+            raise ValueError(f"{error} (comma-separated)") from None
+    return _argument(check, "names")
+
+
+def _compare_families() -> Any:
     from .compare import FAMILIES
 
-    names = list(dict.fromkeys(n.strip().lower() for n in text.split(",") if n.strip()))  # each once
-    bad = [n for n in names if n not in FAMILIES]
-    if bad or not names:
-        raise argparse.ArgumentTypeError(f"{', '.join(bad) or repr(text)} not an integrator family; "
-                                         f"allowed: {', '.join(FAMILIES)} (comma-separated)")
-    return names
+    return FAMILIES
 
 
-def _case_names(text):
+def _stability_cases() -> Any:
     from .stability import cases
 
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    bad = [n for n in names if n not in cases()]
-    if bad or not names:
-        raise argparse.ArgumentTypeError(f"{', '.join(bad) or repr(text)} not a case; allowed: "
-                                         f"{', '.join(cases())} (comma-separated)")
-    return names
+    return cases()
 
 
-def _stability_families(text):
-    names = [n.strip().lower() for n in text.split(",") if n.strip()]
-    bad = [n for n in names if n not in ("pfvi", "ias15", "whfast")]
-    if bad or not names:
-        raise argparse.ArgumentTypeError(f"{', '.join(bad) or repr(text)} not an integrator; allowed: "
-                                         "pfvi, ias15, whfast (comma-separated)")
-    return names
+def _stability_integrators() -> Any:
+    from .stability import FAMILIES
+
+    return FAMILIES
+
+
+_families = _names(_compare_families, "an integrator family", lower=True)
+_case_names = _names(_stability_cases, "a case")
+_stability_families = _names(_stability_integrators, "an integrator", lower=True)
 
 
 def version_text() -> str:
@@ -171,7 +159,7 @@ def build_parser() -> argparse.ArgumentParser:
             compare.add_argument(option, action="store_const", const=False, default=None,
                                  help=f"{text} [{', '.join(scenes)}]")
             continue
-        parse = _number(kind) if kind == "number" else str if kind == "epoch" else _quantity(kind)
+        parse = _number if kind == "number" else str if kind == "epoch" else _quantity(kind)
         compare.add_argument(option, type=parse, default=None, help=f"{text} [{', '.join(scenes)}]")
     compare.add_argument("--integrators", type=_families, default=None,
                          help="comma-separated families to run (default: all that apply to the scene)")
@@ -467,8 +455,10 @@ def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv:
     print(f"{scene.describe()}: {len(settings)} runs, best of {args.repeats}", flush=True)
     bar = Progress(len(settings))
     try:
-        results = compare.run(scene, settings, repeats=args.repeats, samples=args.samples, workers=args.workers,
-                              scheduler=scheduler, progress=bar, budget=args.budget)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", compare.NoRunFinished)  # said below, as the error it is here
+            results = compare.run(scene, settings, repeats=args.repeats, samples=args.samples,
+                                  workers=args.workers, scheduler=scheduler, progress=bar, budget=args.budget)
     finally:
         bar.close()
         if scheduler is not None:
@@ -488,6 +478,9 @@ def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv:
     if warned:
         print(f"REBOUND warned in {len(warned)} run(s), explained in the page's Warnings section:")
         print(report.warnings_section(warned))
+    if results.failure and not results.interrupted:  # nothing measured: the page shows why, the command fails
+        print(f"error: {results.failure}; each run's verdict: {paths['md']}", file=sys.stderr)
+        return 1
     print("Fastest to a position error (wall time, best of the sweep):")
     length = report.length_unit(results)
     for sentence in report.conclusions(results, results.reference.get("uncertainty", 0.0), length):

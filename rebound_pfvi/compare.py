@@ -39,7 +39,7 @@ import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
-from . import DEFAULTS, runner, runs, verdict
+from . import DEFAULTS, checks, runner, runs, verdict
 from .integrators import FAMILIES, WHFAST_CORRECTED, pfvi_label, pfvi_options
 from .integrators import configure as configure_integrator
 from .runs import ProgressCallback, Run
@@ -146,10 +146,8 @@ def default_settings(scene: Scene, size: str = "quick",
     scene's own (``scene.sweep``, the solar system's). `families` restricts it."""
     if size not in ("quick", "full"):
         raise ValueError(f"size={size!r} is not valid; allowed: quick, full")
-    families = tuple(families or scene.families)
-    for family in families:
-        if family not in FAMILIES:
-            raise ValueError(f"family={family!r} is not an integrator family; allowed: {', '.join(FAMILIES)}")
+    families = tuple(scene.families if not families else
+                     checks.names(families, FAMILIES, "families", "an integrator family"))
     settings = []
     for family in families:
         if family not in scene.families:
@@ -344,6 +342,10 @@ def judge(scene: Scene, run: Run) -> Tuple[str, str]:
     return runs.judge(run, getattr(scene, "tolerance", verdict.DEFAULT))
 
 
+class NoRunFinished(RuntimeWarning):
+    """Issued by :func:`run` when no run of the sweep got to its end with finite errors."""
+
+
 @dataclass
 class Results:
     """The runs of a sweep and what is needed to read them."""
@@ -364,6 +366,20 @@ class Results:
     def finished(self) -> int:
         return len(self.rows)
 
+    @property
+    def failure(self) -> str:
+        """"" when some run got to its end with finite errors (what the
+        tables, the plot and the conclusions read); else one line saying that
+        no run did, with what became of them: "no run finished with finite
+        errors (30 crashed, 4 refused)"."""
+        if not self.rows or any(r.status == "ok" for r in self.rows):
+            return ""
+        what: Dict[str, int] = {}
+        for r in self.rows:
+            word = "diverged" if r.status.startswith("diverged") else r.verdict or r.status.split(":")[0]
+            what[word] = what.get(word, 0) + 1
+        return f"no run finished with finite errors ({', '.join(f'{n} {w}' for w, n in what.items())})"
+
     def verdict_counts(self) -> Dict[str, Dict[str, int]]:
         """{line: {verdict: runs}} (a line is an integrator with its options, e.g. "pfvi s=4 phase")."""
         return runs.count(self.rows)
@@ -372,8 +388,9 @@ class Results:
         """Everything the sweep found, as JSON-ready data (the page's .json)."""
         from .units import REBOUND_UNITS
 
-        own = getattr(self.scene, "unit_names", True) is None
-        unit_names = ("the simulation's own",) * 3 if own else REBOUND_UNITS
+        unit_names = getattr(self.scene, "unit_names", REBOUND_UNITS)  # a custom simulation's: its own
+        if unit_names is None:
+            unit_names = ("the simulation's own",) * 3
         return {"scene": self.scene.name, "params": self.scene.params, "description": self.scene.describe(),
                 "t_end": self.scene.t_end, "period": self.scene.period,
                 "units": {"length": unit_names[0], "time": unit_names[1], "mass": unit_names[2],
@@ -402,45 +419,50 @@ class Results:
         t["energy_error_max"] = [r.energy_error_max for r in ok]
         t["energy_error_final"] = [r.energy_error_final for r in ok]
         errors = [r.position_error for r in ok]
-        if getattr(self.scene, "unit_names", True) is None:  # a custom simulation in its own units
+        in_au = getattr(self.scene, "length_in_au", 1.0)  # a custom simulation's: its length unit's
+        if in_au is None:  # a custom simulation without sim.units: its own units
             t["position_error"] = errors
         else:
-            t["position_error"] = errors << u.AU
+            t["position_error"] = (errors << u.AU) * in_au
             t["position_error_km"] = t["position_error"].to(u.km)
         return t
 
 
 def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int = 3, samples: int = 100,
         workers: Optional[int] = None, scheduler: Any = None,
-        progress: Optional[ProgressCallback] = None, budget: Optional[float] = None) -> Results:
+        progress: Optional[ProgressCallback] = None, budget: Any = None) -> Results:
     """Runs a sweep; returns :class:`Results` (runs in the order of `settings`).
 
     workers: processes of the local pool (default: the machine's cores; 1 runs
     here). scheduler: the address of a Dask distributed scheduler, or a
     ``distributed.Client``. progress(done, total, run) is called after each run.
-    budget: seconds of wall time per setting (see :func:`run_setting`; None:
-    no limit); in the local pool a run still busy
+    budget: wall time per setting, in seconds or as a time Quantity (``5 *
+    u.s``; see :func:`run_setting`; None: no limit); in the local pool a run still busy
     :data:`rebound_pfvi.runner.GRACE_SECONDS` after its budget is killed
     ("over budget"), and a run whose process dies is "crashed".
     Ctrl-C stops the sweep and returns the finished runs with
     ``interrupted=True``.
+
+    A sweep in which no run got to its end with finite errors (all refused,
+    crashed, over budget or diverged: e.g. an oscillator with omega = 1e300
+    /yr) is still returned, so that :func:`rebound_pfvi.report.write` can
+    write every run's verdict; its ``failure`` says so in one line (it is ""
+    otherwise), and a :class:`NoRunFinished` warning with the same words is
+    issued (``warnings.simplefilter("error", NoRunFinished)`` makes it an
+    exception). The command line writes the page and exits with status 1.
     """
     settings = list(settings if settings is not None else default_settings(scene))
     if not settings:
         raise ValueError("settings: the sweep is empty (no integrator family applies to this scene)")
-    if int(repeats) < 1:
-        raise ValueError(f"repeats={repeats!r} must be at least 1")
-    if int(samples) < 1:
-        raise ValueError(f"samples={samples!r} must be at least 1")
-    if workers is not None and int(workers) < 1:
-        raise ValueError(f"workers={workers!r} must be at least 1")
-    if budget is not None and not (isinstance(budget, (int, float)) and budget > 0 and math.isfinite(budget)):
-        raise ValueError(f"budget={budget!r} must be a positive number of seconds (or None)")
+    # The command line's checks (rebound_pfvi.checks), with the arguments' names.
+    repeats, samples = checks.positive_int(repeats, "repeats"), checks.positive_int(samples, "samples")
+    workers = None if workers is None else checks.positive_int(workers, "workers")
+    budget = None if budget is None else checks.seconds(budget, "budget")
     reference = scene.reference()
     # The hard limit: a run still busy GRACE_SECONDS after its budget is killed (in a worker process;
     # nothing can kill a run in this one).
     limit = None if budget is None else budget + runner.GRACE_SECONDS
-    tasks = [runner.Task(run_setting, (scene, s, reference, int(repeats), int(samples), budget), limit)
+    tasks = [runner.Task(run_setting, (scene, s, reference, repeats, samples, budget), limit)
              for s in settings]
     done: Dict[int, Run] = {}
     interrupted = False
@@ -471,5 +493,11 @@ def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int
     except KeyboardInterrupt:
         interrupted = True
     rows = [done[i] for i in sorted(done)]
-    return Results(scene, settings, rows, reference, int(repeats), int(samples), workers, where,
-                   time.perf_counter() - tick, interrupted, budget)
+    results = Results(scene, settings, rows, reference, repeats, samples, workers, where,
+                      time.perf_counter() - tick, interrupted, budget)
+    if results.failure:
+        import warnings
+
+        warnings.warn(f"{scene.name}: {results.failure}; each run's verdict is in results.rows",
+                      NoRunFinished, stacklevel=2)
+    return results

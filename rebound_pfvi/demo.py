@@ -18,6 +18,7 @@ from typing import Any, Callable, Dict, List, Tuple
 import rebound
 
 from . import INTEGRATOR_NAME  # noqa: F401  (registers "pfvi")
+from . import checks
 from .integrators import configure as configure_integrator, pfvi_options
 from .scenes import kepler_relative, orbit_elements
 
@@ -87,8 +88,10 @@ def run_case(e: float, name: str, orbits: float, steps_per_orbit: int) -> Dict[s
             "wall_s": wall, "warnings": [str(w.message) for w in caught]}
 
 
-def run_demo(orbits: float = 100, write: Callable[[str], Any] = print) -> List[Dict[str, Any]]:
-    """Prints (through `write`) and returns the demo's table."""
+def run_demo(orbits: int = 100, write: Callable[[str], Any] = print) -> List[Dict[str, Any]]:
+    """Prints (through `write`) and returns the demo's table. orbits: a
+    positive integer, as ``--orbits`` takes (ValueError otherwise)."""
+    orbits = checks.positive_int(orbits, "orbits")
     write(f"Two bodies (m = 1, {M_PLANET:g}), a = 1, centre-of-mass frame, {orbits} orbits.")
     write("pfvi (defaults): s = 8, adaptive symmetric steps, epsilon 1e-6; the seed's two-point scheme: fixed "
           "steps (steps per orbit in brackets), second order; IAS15 adaptive; WHFast 100 steps per orbit.")

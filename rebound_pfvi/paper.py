@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
+from . import checks
 from .integrators import SEED_MODEL, configure as configure_integrator
 from .report import fmt
 from .scenes import kepler_relative, orbit_elements
@@ -250,6 +251,8 @@ def figure2_rows(e: float = 0.95, periods: float = 1e5, samples: int = 2000, sta
     (exact_finish_time=0), so the samples are not every step. The position
     error is the distance from the exact Kepler position at the same time.
     """
+    periods, samples = checks.positive_number(periods, "periods"), checks.positive_int(samples, "samples")
+    epsilon = checks.positive_number(epsilon, "epsilon")
     sim = seed_problem(e)
     elements = orbit_elements(sim)
     E0 = _specific_energy(sim)
@@ -272,6 +275,7 @@ def figure3_rows(e: float = 0.95, periods: float = 10, stages: int = 4, epsilon:
                  step_control: str = "reversible") -> List[Row]:
     """The curvature frequency at every step over the first periods (seed Figure 3),
     beside its exact value on the exact orbit at the same time."""
+    periods, epsilon = checks.positive_number(periods, "periods"), checks.positive_number(epsilon, "epsilon")
     sim = seed_problem(e)
     elements = orbit_elements(sim)
     period = sim.particles[1].P

@@ -11,6 +11,8 @@ import os
 import platform
 from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Optional
 
+from .checks import file_name
+
 if TYPE_CHECKING:
     import pathlib
 
@@ -43,7 +45,7 @@ def _knob(row: Run) -> str:
 
 def length_unit(results: Results) -> str:
     """How the page names the position error's unit."""
-    return "AU" if getattr(results.scene, "unit_names", True) is not None else "sim. length unit"
+    return str(getattr(results.scene, "length_unit", "AU"))
 
 
 def markdown_table(rows: Iterable[Run], length: str = "AU") -> str:
@@ -386,10 +388,10 @@ def _tighter_section(rows: List[Run]) -> str:
 def write(results: Results, output: str, basename: Optional[str] = None,
           command: Optional[str] = None) -> Dict[str, str]:
     """Writes <basename>.json, .csv, .md and .png (if matplotlib is installed)
-    into `output` (basename: the scene's slug, e.g. kepler-e0.95); returns the
-    paths written."""
+    into `output` (basename: the scene's slug, e.g. kepler-e0.95; a name
+    without a folder, ValueError otherwise); returns the paths written."""
+    base = os.path.join(output, file_name(results.scene.slug if basename is None else basename, "basename"))
     os.makedirs(output, exist_ok=True)
-    base = os.path.join(output, basename or results.scene.slug)
     data = results.to_dict()
     data["machine"] = machine()
     data["command"] = command
@@ -414,7 +416,7 @@ def write(results: Results, output: str, basename: Optional[str] = None,
         png_note = "\n(No plot: matplotlib is not installed; pip install 'rebound_pfvi[plot]'.)\n"
     m = data["machine"]
     status = (f"**Interrupted**: {results.finished} of {len(results.settings)} runs finished.\n\n"
-              if results.interrupted else "")
+              if results.interrupted else f"**Nothing measured**: {results.failure}.\n\n" if results.failure else "")
     floor = results.reference.get("uncertainty", 0.0)
     length = length_unit(results)
     bodies = bodies_section(results.rows)

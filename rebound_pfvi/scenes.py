@@ -448,8 +448,10 @@ class Custom(Scene):
     """Your own REBOUND simulation as a scene, in its own units.
 
     ``Custom(sim, duration)`` runs from the simulation's current state for
-    `duration` (in the simulation's time unit, or a Quantity if ``sim.units``
-    is set); the reference is IAS15 at a tight tolerance, the energy is
+    `duration`: a number in the simulation's time unit, or a time Quantity
+    if ``sim.units`` is set (any of REBOUND's units: ``("AU", "yr", "Msun")``,
+    ``("m", "s", "kg")``, ``("km", "day", "Msun")``, ...; converted with
+    REBOUND's own second per unit); the reference is IAS15 at a tight tolerance, the energy is
     ``sim.energy()``. `period` is the time scale that fixed steps are counted
     against: by default the shortest period of the bound orbits in
     ``sim.orbits()``. The simulation is copied (pickled) when the scene is
@@ -470,17 +472,15 @@ class Custom(Scene):
         if bool(sim._additional_forces):
             raise ValueError("sim: additional_forces is set; Python callbacks cannot be copied into worker "
                              "processes (write a Scene subclass that installs them in build())")
+        #: the simulation's units as REBOUND names them, (length, time, mass), or None where sim.units is not set
         self.unit_names = _sim_units(sim)
-        kind_ok = self.unit_names is not None
-        self.duration = _positive(units.to_scene(duration, "time", "duration") if kind_ok and hasattr(duration, "unit")
-                                  else _plain(duration, "duration"), "duration")
+        self.duration = _positive(_sim_time(duration, "duration", self.unit_names), "duration", duration)
         if period is None:
             periods = [o.P for o in sim.orbits() if o.a > 0 and math.isfinite(o.P)] if sim.N > 1 else []
             if not periods:
                 raise ValueError("period: the simulation has no bound orbit; give period= explicitly")
             period = min(periods)
-        self.period_value = _positive(units.to_scene(period, "time", "period") if kind_ok and hasattr(period, "unit")
-                                      else _plain(period, "period"), "period")
+        self.period_value = _positive(_sim_time(period, "period", self.unit_names), "period", period)
         self.label = str(label)
         self.t_start = float(sim.t)
         self._state = pickle.dumps(sim)
@@ -510,24 +510,49 @@ class Custom(Scene):
 
     def describe(self) -> str:
         sim = self.build()
-        return (f"{self.label}: your simulation, N = {sim.N}, from t = {self.t_start:g} for {self.duration:g}"
-                f" (shortest period {self.period_value:g}){'' if self.unit_names else ', in its own units'}")
+        t = "" if self.unit_names is None else f" {self.unit_names[1]}"
+        return (f"{self.label}: your simulation, N = {sim.N}, from t = {self.t_start:g}{t} for {self.duration:g}{t}"
+                f" (shortest period {self.period_value:g}{t}){', in its own units' if self.unit_names is None else ''}")
+
+    @property
+    def length_unit(self) -> str:
+        """The simulation's length unit as REBOUND names it ("AU" for "au"), or
+        "sim. length unit" where sim.units is not set."""
+        if self.unit_names is None:
+            return "sim. length unit"
+        return "AU" if self.unit_names[0] == "au" else self.unit_names[0]
+
+    @property
+    def length_in_au(self) -> Optional[float]:
+        """AU per length unit of the simulation (REBOUND's metres per unit), or None where sim.units is not set."""
+        if self.unit_names is None:
+            return None
+        from rebound.units import lengths_SI
+
+        return float(lengths_SI[self.unit_names[0]] / lengths_SI["au"])
 
 
 def _sim_units(sim: rebound.Simulation) -> Optional[Tuple[str, str, str]]:
-    """REBOUND_UNITS if the simulation was set up in AU, yr, Msun, else None."""
+    """The simulation's (length, time, mass) units as REBOUND names them ("au", "yr", "msun"), or None if not set."""
     u = sim.units
-    return REBOUND_UNITS_LOWER if (u["length"], u["time"], u["mass"]) == REBOUND_UNITS_LOWER else None
+    names = (u["length"], u["time"], u["mass"])
+    return None if None in names else names
 
 
-REBOUND_UNITS_LOWER = ("au", "yr", "msun")
+def _sim_time(value: Any, name: str, unit_names: Optional[Tuple[str, str, str]]) -> float:
+    """A time in the simulation's time unit: a plain number as it is, a
+    Quantity converted through seconds (REBOUND's seconds per unit)."""
+    if not hasattr(value, "unit") and not isinstance(value, str):
+        return _number(value, name)
+    if unit_names is None:
+        raise ValueError(f"{name}={units.show(value)}: this simulation has no units (sim.units is not set), so a "
+                         "Quantity cannot be converted; give a plain number in its time unit, or set its units "
+                         "before adding particles, e.g. sim.units = ('AU', 'yr', 'Msun') or ('m', 's', 'kg')")
+    from rebound.units import times_SI
 
-
-def _plain(value: Any, name: str) -> float:
-    if hasattr(value, "unit"):
-        raise ValueError(f"{name}={value}: this simulation has no units set (sim.units), give a plain number in "
-                         "its time unit; or set sim.units = ('AU', 'yr', 'Msun') before adding particles")
-    return _number(value, name)
+    if isinstance(value, str):
+        value = units.parse(value, "time", name)
+    return units.to_unit(value, "time", "s", name) / times_SI[unit_names[1]]
 
 
 #: Jupiter's mass (nominal GM ratio) and J2000 mean elements (rounded), for the scenes beside Jupiter.

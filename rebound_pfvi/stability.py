@@ -29,7 +29,7 @@ import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple
 
-from . import runner, runs, scenes, verdict
+from . import checks, runner, runs, scenes, verdict
 from . import DEFAULTS
 from .integrators import configure as configure_integrator, pfvi_label, pfvi_options
 from .runs import ProgressCallback, Run
@@ -448,23 +448,25 @@ class Config:
         return self.family.upper() if self.family != "whfast" else "WHFast"
 
 
-def default_configs(integrators: Sequence[str] = ("pfvi", "ias15", "whfast"), fittings: Sequence[str] = FITTINGS,
+#: The integrator families of the stability cases.
+FAMILIES = ("pfvi", "ias15", "whfast")
+
+
+def default_configs(integrators: Sequence[str] = FAMILIES, fittings: Sequence[str] = FITTINGS,
                     stages: Sequence[int] = STAGES, epsilon: float = 1e-6,
                     ias15_epsilon: float = 1e-9) -> List[Config]:
     """pfvi at its defaults first (but epsilon), then each fitting at each
     of `stages` (the seed's with its frequency and centre); IAS15; WHFast."""
     configs = []
-    for family in integrators:
+    for family in checks.names(integrators, FAMILIES, "integrators", "an integrator"):
         if family == "pfvi":
             configs.append(Config("pfvi", (), epsilon))
             configs += [Config("pfvi", (("stages", s),) + ((("fitting", f),) if f != DEFAULTS["fitting"] else ()),
                                epsilon) for s in stages for f in fittings]
         elif family == "ias15":
             configs.append(Config("ias15", epsilon=ias15_epsilon))
-        elif family == "whfast":
-            configs.append(Config("whfast"))
         else:
-            raise ValueError(f"integrators: {family!r} is not one of pfvi, ias15, whfast")
+            configs.append(Config("whfast"))
     return configs
 
 
@@ -653,15 +655,15 @@ def what_happened(row: Run) -> str:
 
 
 def run_all(case_names: Optional[Sequence[str]] = None, configs: Optional[Sequence[Config]] = None,
-            budget: float = 60.0, workers: int = 2, progress: Optional[ProgressCallback] = None) -> Report:
+            budget: Any = 60.0, workers: int = 2, progress: Optional[ProgressCallback] = None) -> Report:
     """Every case x every config, each run in a process of its own (rebound_pfvi.runner);
     references first. progress(done, total, run) is called as each run ends (before it is judged:
-    the runs are judged once all have ended)."""
+    the runs are judged once all have ended). budget: seconds of integration per run, or a time
+    Quantity (``60 * u.s``)."""
+    # The command line's checks (rebound_pfvi.checks), with the arguments' names.
+    budget, workers = checks.seconds(budget, "budget"), checks.positive_int(workers, "workers")
     table = cases()
-    names = list(case_names) if case_names else list(table)
-    for name in names:
-        if name not in table:
-            raise ValueError(f"cases: {name!r} is not a case; allowed: {', '.join(table)}")
+    names = checks.names(case_names, table, "case_names", "a case") if case_names else list(table)
     configs = configs or default_configs()
     tick = time.perf_counter()
     references = {}

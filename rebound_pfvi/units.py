@@ -69,6 +69,7 @@ def parse(text: str, kind: str, name: str) -> Any:
     # The text as the user wrote it, for errors about the value (show());
     # astropy keeps it on this Quantity only, not on what is computed from it.
     value.info.description = " ".join(text.split())
+    to_unit(value, kind, scene_unit(kind), name)  # of the kind asked for ("1 AU" is no time), finite
     return value
 
 
@@ -98,19 +99,25 @@ def to_scene(value: Any, kind: str, name: str) -> float:
     if isinstance(value, str):
         value = parse(value, kind, name)
     if hasattr(value, "unit"):
-        u = _u()
-        unit = scene_unit(kind)
-        try:
-            # Frequencies may be given in rad/time; radians are dimensionless here.
-            number = value.to_value(unit, equivalencies=u.dimensionless_angles())
-        except u.UnitConversionError:
-            raise ValueError(f"{name}={show(value)} has unit {value.unit}, which is not a {kind}; "
-                             f"allowed: {', '.join(ALLOWED.get(kind, (str(unit),)))}") from None
-        number = float(number)
-        if not math.isfinite(number):
-            raise ValueError(f"{name}={show(value)} is not finite")
-        return number
+        return to_unit(value, kind, scene_unit(kind), name)
     return plain_number(value, name)
+
+
+def to_unit(value: Any, kind: str, unit: Any, name: str) -> float:
+    """A Quantity of `kind` (length, time, mass, frequency) as a finite float
+    in `unit` (an astropy unit or its name). `name` names the argument in
+    errors, which name the kind a Quantity of another kind is not."""
+    u = _u()
+    try:
+        # Frequencies may be given in rad/time; radians are dimensionless here.
+        number = value.to_value(unit, equivalencies=u.dimensionless_angles())
+    except u.UnitConversionError:
+        raise ValueError(f"{name}={show(value)} has unit {value.unit}, which is not a {kind}; "
+                         f"allowed: {', '.join(ALLOWED.get(kind, (str(unit),)))}") from None
+    number = float(number)
+    if not math.isfinite(number):
+        raise ValueError(f"{name}={show(value)} is not finite")
+    return number
 
 
 def plain_number(value: Any, name: str) -> float:
@@ -120,6 +127,8 @@ def plain_number(value: Any, name: str) -> float:
     try:
         number = float(value)
     except (TypeError, ValueError):
+        if isinstance(value, str):  # (the command line's text)
+            raise ValueError(f"{name}={value!r} is not a number") from None
         if hasattr(value, "unit"):   # (a dimensionless Quantity converts above)
             raise ValueError(f"{name}={value!r} has unit {value.unit}; {name} takes a plain number") from None
         raise ValueError(f"{name}={value!r} is neither a number nor a Quantity") from None

@@ -1,0 +1,164 @@
+"""Issue 42, the Python boundary (third hostile trial): the Python API checks
+what the command line checks, with the same checks, and errors name the
+argument or field and the value at fault."""
+import math
+import warnings
+
+import astropy.units as u
+import pytest
+
+from rebound_pfvi import compare, demo, paper, report, scenes, stability, units
+from rebound_pfvi.__main__ import main
+
+#: Sweeps in which no run gets to its end: every run crashes (an overflow) or is refused (a force that is not finite).
+NOTHING_FINISHES = [
+    (["--scene", "oscillator", "--omega", "1e300 1/yr", "--integrators", "ias15"], "oscillator.md", "4 crashed"),
+    (["--scene", "kepler", "--m", "1e300 kg", "--integrators", "pfvi", "--periods", "1"], "kepler-e0.95.md",
+     "16 refused"),
+]
+
+
+@pytest.mark.parametrize("argv, page, what", NOTHING_FINISHES)
+def test_a_sweep_in_which_no_run_finished_writes_its_page_and_fails(argv, page, what, tmp_path, capsys):
+    code = main(["compare", *argv, "--output", str(tmp_path), "--workers", "1", "--repeats", "1",
+                 "--samples", "2"])
+    assert code == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == (f"error: no run finished with finite errors ({what}); each run's verdict: "
+                       f"{tmp_path / page}")
+    text = (tmp_path / page).read_text()
+    assert f"**Nothing measured**: no run finished with finite errors ({what})." in text
+    assert "| crashed |" in text or "| refused |" in text
+
+
+def test_compare_run_says_when_no_run_finished():
+    scene = scenes.Oscillator(omega=1e300, periods=1)
+    with pytest.warns(compare.NoRunFinished, match=r"oscillator: no run finished with finite errors \(2 crashed\)"):
+        results = compare.run(scene, [compare.Setting("ias15", 1e-5), compare.Setting("pfvi", 1e-6)], repeats=1,
+                              samples=2, workers=1)
+    assert results.failure == "no run finished with finite errors (2 crashed)"
+    assert [r.verdict for r in results.rows] == ["crashed", "crashed"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", compare.NoRunFinished)
+        fine = compare.run(scenes.Kepler(periods=1), [compare.Setting("ias15", 1e-5)], repeats=1, samples=2,
+                           workers=1)
+    assert fine.failure == ""
+
+
+ONE = [compare.Setting("ias15", 1e-5)]
+
+
+def kepler_run(**keywords):
+    return compare.run(scenes.Kepler(periods=1), ONE, **{"repeats": 1, "samples": 2, "workers": 1, **keywords})
+
+
+# Each refused before anything runs (demo.run_demo(nan) integrated for ever; repeats=2.5 ran 2 repeats).
+@pytest.mark.parametrize("call, message", [
+    (lambda: demo.run_demo(math.nan), "orbits=nan is not an integer"),
+    (lambda: demo.run_demo(2.5), "orbits=2.5 is not an integer"),
+    (lambda: demo.run_demo(0), "orbits=0 must be at least 1"),
+    (lambda: kepler_run(repeats=2.5), "repeats=2.5 is not an integer"),
+    (lambda: kepler_run(samples=True), "samples=True is not an integer"),
+    (lambda: kepler_run(workers=0), "workers=0 must be at least 1"),
+    (lambda: kepler_run(budget=5 * u.m), "budget=5 m has unit m, which is not a time; allowed: yr, day, d, s, h"),
+    (lambda: kepler_run(budget=-1 * u.s), "budget=-1 s must be positive"),
+    (lambda: kepler_run(budget=math.inf), "budget=inf is not finite"),
+    (lambda: stability.run_all(["kepler-e0.99"], budget=math.nan), "budget=nan is not finite"),
+    (lambda: stability.run_all(["kepler-e0.99"], workers=1.5), "workers=1.5 is not an integer"),
+    (lambda: units.parse("1 AU", "time", "duration"), "duration=1 AU has unit AU, which is not a time"),
+    (lambda: units.parse("2 kg", "length", "a"), "a=2 kg has unit kg, which is not a length"),
+    (lambda: paper.figure2_rows(periods=math.nan), "periods=nan is not finite"),
+    (lambda: paper.figure2_rows(periods=1, samples=0), "samples=0 must be at least 1"),
+], ids=lambda v: v if isinstance(v, str) else "")
+def test_the_python_api_makes_the_command_lines_checks(call, message):
+    with pytest.raises(ValueError) as refused:
+        call()
+    assert str(refused.value) == message or str(refused.value).startswith(message + ";"), str(refused.value)
+
+
+def test_a_budget_may_be_a_time_quantity():
+    assert kepler_run(budget=2 * u.min).budget == 120.0
+    assert units.parse("3 day", "time", "t").to_value(u.day) == 3.0
+
+
+@pytest.mark.parametrize("basename", ["../x", "a/b", "..", "", "/tmp/x"])
+def test_a_page_name_with_a_folder_is_refused_and_nothing_written(basename, tmp_path):
+    results = kepler_run()
+    with pytest.raises(ValueError, match=r"basename=.* is not a file name: give a name without a folder"):
+        report.write(results, str(tmp_path / "out"), basename=basename)
+    assert list(tmp_path.iterdir()) == []
+    assert set(report.write(results, str(tmp_path / "out"), basename="mine")) == {"json", "csv", "md", "png"}
+
+
+# A name given twice ran twice (stability --cases a,a; --integrators pfvi,pfvi); compare's --integrators
+# dropped the second silently. Now refused, naming it, by the command line and the Python functions alike.
+@pytest.mark.parametrize("argv, message", [
+    (["stability", "--cases", "kepler-e0.99,flyby-e1,kepler-e0.99"],
+     "argument --cases: kepler-e0.99 given twice; give each once (comma-separated)"),
+    (["stability", "--integrators", "pfvi,ias15,PFVI"],
+     "argument --integrators: pfvi given twice; give each once (comma-separated)"),
+    (["compare", "--integrators", "ias15,ias15"],
+     "argument --integrators: ias15 given twice; give each once (comma-separated)"),
+])
+def test_a_name_given_twice_is_an_argument_error(argv, message, capsys, tmp_path):
+    with pytest.raises(SystemExit) as stop:
+        main([*argv, "--output", str(tmp_path / "out")])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1].endswith(message)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: stability.run_all(["flyby-e1", "flyby-e1"]), "case_names: flyby-e1 given twice; give each once"),
+    (lambda: stability.run_all(["nope"]), "case_names: nope not a case; allowed: kepler-e0.99, "),
+    (lambda: stability.default_configs(["whfast", "whfast"]), "integrators: whfast given twice; give each once"),
+    (lambda: compare.default_settings(scenes.Kepler(), families=["bs", "bs"]),
+     "families: bs given twice; give each once"),
+], ids=["run_all", "unknown", "default_configs", "default_settings"])
+def test_the_python_functions_refuse_a_name_given_twice(call, message):
+    with pytest.raises(ValueError) as refused:
+        call()
+    assert str(refused.value).startswith(message), str(refused.value)
+
+
+def _two_bodies(triple):
+    import rebound
+
+    sim = rebound.Simulation()
+    if triple is not None:
+        sim.units = triple
+    mass, a = (1.0, 1.0) if triple is None else ((1 * u.Msun).to_value(triple[2]), (1 * u.AU).to_value(triple[0]))
+    sim.add(m=mass)
+    sim.add(m=1e-3 * mass, a=a, e=0.1)
+    sim.move_to_com()
+    return sim
+
+
+# Quantities were taken only where sim.units was AU, yr, Msun; every other unit set was called "no units set".
+@pytest.mark.parametrize("triple, length", [(("m", "s", "kg"), "m"), (("km", "day", "Msun"), "km"),
+                                            (("AU", "yr", "Msun"), "AU")])
+def test_a_custom_scene_converts_quantities_to_the_simulations_units(triple, length, tmp_path):
+    scene = scenes.Custom(_two_bodies(triple), 2 * u.yr, period=1 * u.day, label="mine")
+    assert scene.duration == pytest.approx((2 * u.yr).to_value(triple[1]), rel=1e-15)
+    assert scene.period == pytest.approx((1 * u.day).to_value(triple[1]), rel=1e-15)
+    assert scenes.Custom(_two_bodies(triple), "3 h").duration == pytest.approx((3 * u.h).to_value(triple[1]))
+    with pytest.raises(ValueError, match=r"^duration=2 m has unit m, which is not a time"):
+        scenes.Custom(_two_bodies(triple), 2 * u.m)
+    if length == "km":  # the page and the table in the simulation's length unit
+        results = compare.run(scene, ONE, repeats=1, samples=2, workers=1)
+        report.write(results, str(tmp_path))
+        text = (tmp_path / "mine.md").read_text()
+        assert " km. Energy:" in text and "- To 1e-02 km: IAS15" in text
+        assert results.to_dict()["units"]["length"] == "km"
+        table = results.table()
+        assert table["position_error_km"][0].to_value(u.km) == pytest.approx(results.rows[0].position_error)
+
+
+def test_a_quantity_for_a_simulation_without_units_says_how_to_set_them():
+    with pytest.raises(ValueError) as refused:
+        scenes.Custom(_two_bodies(None), 1 * u.yr)
+    assert str(refused.value) == (
+        "duration=1 yr: this simulation has no units (sim.units is not set), so a Quantity cannot be converted; "
+        "give a plain number in its time unit, or set its units before adding particles, e.g. "
+        "sim.units = ('AU', 'yr', 'Msun') or ('m', 's', 'kg')")
+    assert scenes.Custom(_two_bodies(None), 2.0).describe().endswith("in its own units")
