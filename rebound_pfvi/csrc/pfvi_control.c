@@ -836,7 +836,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         st->track_done = full ? t.length : t.done + step;
         // Lambda falls back where a whole interval resolved the forces
         // finer than needed (never below 1: the density's own steps).
-        if (full && lambda > 1. && u*PFVI_RESOLUTION_SLACK < u_target){
+        if (full && t.done == 0. && lambda > 1. && u*PFVI_RESOLUTION_SLACK < u_target){
             // Clamped at exactly 1: lambda*(1/lambda) can round below it, and
             // a lambda below 1 is taken for a damaged one (the track restarts).
             const double lowered = fmax(1., lambda*fmax(1./lambda, PFVI_RESOLUTION_SLACK*u/u_target));
