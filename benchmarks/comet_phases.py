@@ -2,7 +2,7 @@
 phases: its end error depends on where the steps fall at each perihelion, so
 one start per epsilon is a lottery; this gives the spread.
 
-    python -P benchmarks/comet_phases.py 1.2e-7,1e-7,5e-8,2e-8,1e-8,1e-9 [8]   # about 1 min
+    python -P benchmarks/comet_phases.py 1.2e-7,1e-7,5e-8,2e-8,1e-8,1e-9 [8]   # about 5 s
 
 For each epsilon: the end error (largest over bodies, against IAS15 at 1e-13)
 in epsilon a n (a = 2.2 AU, n = 20) from comet mean anomalies 0.5 + 0.7 k,
