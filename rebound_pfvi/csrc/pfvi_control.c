@@ -695,7 +695,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     const double lambda0 = st->density_scale;
     double lambda = lambda0;
     double sigma1 = 0., g1 = 0., u = 0.;
-    int restart = 0, shortened = 0, retakes = 0, unresolved = 0;
+    int restart = 0, shortened = 0, retakes = 0, unresolved = 0, split = 0;
     struct pfvi_field field;
     for (;;){
         const int capped = (h == cap);
@@ -721,6 +721,25 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
             const int coarse = ratio > 1.05 && pow(ratio, 2.*o->stages - 2.) > PFVI_RESOLUTION_MAX;
             // Still coarse after the last retake: no shorter step resolves them.
             unresolved = coarse && retakes == PFVI_RESOLUTION_RETRIES;
+            // A whole interval (taken in one step, as the track began it)
+            // that the density outran and whose stages show it: the density
+            // at an end SPLIT_DENSITY times what the step was sized for, and
+            // the forces resolved worse than SPLIT_RESOLUTION of the Kepler
+            // worst (pfvi.h: a comet falling in from under a planet's term).
+            // It is crossed in two halves: the same interval, so the track
+            // and its grid stay as they were, and a reversal, meeting the
+            // whole interval from its other end, reads the same ends and
+            // stages and splits it the same way (time-symmetric, where a
+            // retake is not).
+            const int whole = !split && !shortened && !capped && t.done == 0. && h == t.length;
+            if (!jump && !coarse && whole && ratio > PFVI_SPLIT_RESOLUTION
+                    && fmax(sigma0, sigma1)*lambda*h > PFVI_SPLIT_DENSITY*kappa){
+                pfvi_roll_back(r, st, N, t0);
+                st->statistics.n_rejected++;
+                split = 1;
+                h = 0.5*t.length;
+                continue;
+            }
             if (!jump && (!coarse || unresolved)){
                 break;
             }
@@ -817,7 +836,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         st->track_done = full ? t.length : t.done + step;
         // Lambda falls back where a whole interval resolved the forces
         // finer than needed (never below 1: the density's own steps).
-        if (full && lambda > 1. && u*PFVI_RESOLUTION_SLACK < u_target){
+        if (full && t.done == 0. && lambda > 1. && u*PFVI_RESOLUTION_SLACK < u_target){
             // Clamped at exactly 1: lambda*(1/lambda) can round below it, and
             // a lambda below 1 is taken for a damaged one (the track restarts).
             const double lowered = fmax(1., lambda*fmax(1./lambda, PFVI_RESOLUTION_SLACK*u/u_target));
@@ -861,7 +880,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     // finish on time; the next step recomputes it the same way.
     r->dt = sign*symmetric_position(st, sign, kappa, sigma1, g1).remaining;
     st->dt_proposed = r->dt;
-    if (!shortened && t.remaining <= cap){
+    if (!shortened && !split && t.remaining <= cap){
         st->dt_last_full = h;
     }
     return h;
