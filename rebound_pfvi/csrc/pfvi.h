@@ -940,6 +940,10 @@ struct pfvi_state {
     // not saved in archives: a restarted run does not replay them).
     struct pfvi_replay replay[PFVI_REPLAY_MAX];
     size_t replay_first, replay_n;
+    // The last step was the first half of a split interval: the next, its
+    // second half, is logged too (pfvi_control.c; not saved in archives).
+    int replay_split_half;
+    size_t replay_count[2];   // entries of the steps taken forward [0] and backward [1]
     // What the symmetric track's time lost to rounding: the state is at
     // r->t + t_compensation (0 if r->t is not t_compensated, the t it was
     // kept for), so that a step capped to finish on time, or an output

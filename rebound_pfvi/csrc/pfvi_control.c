@@ -518,13 +518,25 @@ static void replay_restore(struct pfvi_state* st, const struct pfvi_replay* e){
 #undef PFVI_FIELD_RESTORE
 }
 
+// Which count of replay_count an entry taken in direction sign is in.
+static int replay_side(double sign){
+    return (sign > 0.) ? 0 : 1;
+}
+
+static void replay_clear(struct pfvi_state* st){
+    st->replay_n = 0;
+    st->replay_count[0] = st->replay_count[1] = 0;
+}
+
 static void replay_push(struct pfvi_state* st, const struct pfvi_replay* e){
     if (st->replay_n == PFVI_REPLAY_MAX){
+        st->replay_count[replay_side(st->replay[st->replay_first].sign)]--;
         st->replay_first = (st->replay_first + 1) % PFVI_REPLAY_MAX;   // the oldest goes
         st->replay_n--;
     }
     st->replay[(st->replay_first + st->replay_n) % PFVI_REPLAY_MAX] = *e;
     st->replay_n++;
+    st->replay_count[replay_side(e->sign)]++;
 }
 
 // The logged step a step from t0 in direction sign retraces: the newest
@@ -532,6 +544,9 @@ static void replay_push(struct pfvi_state* st, const struct pfvi_replay* e){
 // it), ending (within the track's rounding of t) where this step starts;
 // its index in the ring, or -1.
 static long replay_due(const struct pfvi_state* st, double t0, double sign){
+    if (st->replay_count[replay_side(-sign)] == 0){
+        return -1;   // (a run that has not turned: no scan of its own entries)
+    }
     for (size_t k=st->replay_n; k-- > 0;){
         const struct pfvi_replay* const e = &st->replay[(st->replay_first + k) % PFVI_REPLAY_MAX];
         if (e->sign == sign){
@@ -545,6 +560,7 @@ static long replay_due(const struct pfvi_state* st, double t0, double sign){
 
 // Removes entry k (0: the oldest) from the ring.
 static void replay_remove(struct pfvi_state* st, size_t k){
+    st->replay_count[replay_side(st->replay[(st->replay_first + k) % PFVI_REPLAY_MAX].sign)]--;
     for (size_t m=k; m+1<st->replay_n; m++){
         st->replay[(st->replay_first + m) % PFVI_REPLAY_MAX] = st->replay[(st->replay_first + m + 1) % PFVI_REPLAY_MAX];
     }
@@ -681,7 +697,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
                     pfvi_roll_back(r, st, N, t0);
                 }
             }
-            st->replay_n = 0;   // not replayed: the log no longer describes the way back
+            replay_clear(st);   // not replayed: the log no longer describes the way back
         }
     }
     struct pfvi_replay before;
@@ -836,7 +852,12 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         st->track_done = full ? t.length : t.done + step;
         // Lambda falls back where a whole interval resolved the forces
         // finer than needed (never below 1: the density's own steps).
-        if (full && t.done == 0. && lambda > 1. && u*PFVI_RESOLUTION_SLACK < u_target){
+        // (Not on a way back still retracing logged steps: the way out's
+        // fallbacks are replayed where it took them, and one of its own,
+        // decided on ends that differ in the last bits, would be a step the
+        // way out did not take.)
+        const int retracing = st->replay_count[replay_side(-sign)] > 0;
+        if (full && t.done == 0. && lambda > 1. && !retracing && u*PFVI_RESOLUTION_SLACK < u_target){
             // Clamped at exactly 1: lambda*(1/lambda) can round below it, and
             // a lambda below 1 is taken for a damaged one (the track restarts).
             const double lowered = fmax(1., lambda*fmax(1./lambda, PFVI_RESOLUTION_SLACK*u/u_target));
@@ -865,7 +886,16 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     }
     st->density_scale = lambda;
     st->statistics.n_asymmetric += (uint64_t)asymmetric;
-    if (asymmetric){
+    // The halves of a split interval are logged beside the asymmetric steps,
+    // though they are time-symmetric: the way back then takes them back as
+    // they were and finds the track as the way out left it (a whole interval
+    // crossed by a varying track carries the grid's round-off on, and the
+    // track amplifies it: docs/solve.md; the retakes a split replaced were
+    // such resynchronisations), and takes them as halves even where its own
+    // checks, on ends that differ in the last bits, would not split.
+    const int split_half = split || st->replay_split_half;
+    st->replay_split_half = split;
+    if (asymmetric || split_half){
         // (A restart of the track and the steady hold's start or end are
         // logged too: the replay restores the track as it was before them.)
         before.t_end = r->t;

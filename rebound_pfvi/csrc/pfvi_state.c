@@ -417,6 +417,8 @@ void pfvi_forget_edited(const struct reb_simulation* r, struct pfvi_state* st){
         st->density_scale = 1.;
         st->density_N = 0;
         st->replay_n = 0;  // nor does the way so far
+        st->replay_count[0] = st->replay_count[1] = 0;
+        st->replay_split_half = 0;
     }
 }
 
