@@ -1203,6 +1203,8 @@ PFVI_INTERNAL void pfvi_keep_end(const struct reb_simulation* r, struct pfvi_sta
 PFVI_INTERNAL void pfvi_keep_end_model(const struct reb_simulation* r, struct pfvi_state* st, size_t N);
 // Drops what particles edited since the last step carried (compensation, predictor).
 PFVI_INTERNAL void pfvi_forget_edited(const struct reb_simulation* r, struct pfvi_state* st);
+// Empties the replay log of the symmetric control (pfvi_control.c), its counts with it.
+PFVI_INTERNAL void pfvi_replay_clear(struct pfvi_state* st);
 // The field the time scales see (struct pfvi_field): REBOUND's G (0 with
 // gravity off), softening, N_active and its ghost boxes at r->t (in st's
 // scratch); 0 (fault recorded) if memory ran out.

@@ -539,7 +539,7 @@ static int replay_side(double sign){
     return (sign > 0.) ? 0 : 1;
 }
 
-static void replay_clear(struct pfvi_state* st){
+void pfvi_replay_clear(struct pfvi_state* st){
     st->replay_n = 0;
     st->replay_count[0] = st->replay_count[1] = 0;
 }
@@ -713,7 +713,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
                     pfvi_roll_back(r, st, N, t0);
                 }
             }
-            replay_clear(st);   // not replayed: the log no longer describes the way back
+            pfvi_replay_clear(st);   // not replayed: the log no longer describes the way back
         }
     }
     struct pfvi_replay before;

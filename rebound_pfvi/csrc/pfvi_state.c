@@ -416,8 +416,7 @@ void pfvi_forget_edited(const struct reb_simulation* r, struct pfvi_state* st){
         st->rho = 0.;  // the symmetric step's density no longer describes them
         st->density_scale = 1.;
         st->density_N = 0;
-        st->replay_n = 0;  // nor does the way so far
-        st->replay_count[0] = st->replay_count[1] = 0;
+        pfvi_replay_clear(st);  // nor does the way so far
         st->replay_split_half = 0;
     }
 }
