@@ -83,6 +83,65 @@ def test_outputs_leave_the_run_bit_identical(scene, outputs):
     assert b.n_rejected == 0
 
 
+def step_ends(build, T):
+    """The run's own step ends below T (sim.steps, no output)."""
+    sim, ends = build(), []
+    while sim.t < T:
+        sim.steps(1)
+        ends.append(sim.t)
+    return ends[:-1]
+
+
+def retrograde_planets(**options):
+    """Two planets and an e = 0.9 retrograde test particle crossing them."""
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=9.5e-4, a=5.2, e=0.05, f=0.6)
+    sim.add(m=2.9e-4, a=9.55, e=0.056, inc=0.04, f=2.4)
+    sim.add(m=0.0, a=3.0, e=0.9, inc=2.8, f=1.0)
+    sim.move_to_com()
+    sim.integrator = "pfvi"
+    for name, value in options.items():
+        setattr(sim.integrator, name, value)
+    return sim
+
+
+@pytest.mark.parametrize("build, T", [(lambda: kepler(e=0.5, epsilon=1e-7), 12.0),
+                                      (lambda: retrograde_planets(epsilon=1e-9), 60.0)],
+                         ids=["kepler", "retrograde-planets"])
+def test_an_output_on_a_step_end_leaves_the_run_bit_identical(build, T):
+    # A requested time exactly on one of the run's step ends (a time read from
+    # sim.t after sim.steps): REBOUND cuts nothing there and restores, after
+    # integrate(), its last full step or the sim.dt the call began with
+    # (0.001 for a new simulation); pfvi goes on with its own proposal, as
+    # after any other output. Before: 23 of 40 step ends on Kepler e = 0.5
+    # changed the run (2.1e-9 in x at t = 60); a steps() after such an output
+    # went 0.001 instead of the run's step.
+    ends = step_ends(build, T)
+    one = run(build, [T])
+    every = run(build, ends + [T])
+    assert state(every).tobytes() == state(one).tobytes()
+    for k in range(0, len(ends), max(1, len(ends)//8)):
+        single = run(build, [ends[k], T])
+        assert state(single).tobytes() == state(one).tobytes(), f"output at the step end t = {ends[k]!r}"
+    # sim.steps after an output on a step end takes the run's next step.
+    shown, steps = build(), build()
+    shown.integrate(ends[3])
+    shown.steps(2)
+    steps.steps(6)
+    assert state(shown).tobytes() == state(steps).tobytes()
+
+
+def test_a_dt_set_after_an_output_on_a_step_end_caps_the_step():
+    sim = kepler(e=0.5, epsilon=1e-7)
+    ends = step_ends(lambda: kepler(e=0.5, epsilon=1e-7), 5.0)
+    sim.integrate(ends[2])
+    t = sim.t
+    sim.dt = 0.01
+    sim.steps(1)
+    assert sim.t - t == pytest.approx(0.01, rel=1e-12)
+
+
 def test_an_output_is_as_accurate_as_the_run():
     # The output step's error against the run's own: each output of a
     # 100-per-orbit cadence against IAS15 at 1e-12, and the run's own states

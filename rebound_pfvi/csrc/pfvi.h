@@ -1108,6 +1108,11 @@ struct pfvi_state {
     // the dt the call started with), so that a sim.dt the user sets after
     // the output is told from it and honoured (issue 40); 0: not known.
     double dt_rebound_leaves;
+    // The sim.dt the last integrate() began with (REBOUND zeroes
+    // dt_last_done as a call begins: the step that finds it zero, not
+    // finishing, is a call's first). REBOUND restores it where no step of the
+    // call was cut to finish: the run's step landed on the time itself.
+    double dt_call_began;
     int last_finishing;
     size_t step_N;
     // Variational particles (REBOUND's r->particles_var, first and second

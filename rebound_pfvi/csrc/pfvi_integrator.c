@@ -976,6 +976,14 @@ static double output_near(const struct pfvi_state* st, double t, double step){
     return PFVI_OUTPUT_NEAR*span + PFVI_OUTPUT_NEAR_ULPS*DBL_EPSILON*fabs(t);
 }
 
+// The simulation is the run's last step's end, unedited, and sim.dt is a
+// value REBOUND restores after integrate() (pfvi_step), not one the user set.
+static int rebound_restored_at_end(const struct reb_simulation* r, const struct pfvi_state* st){
+    const double dt = fabs(r->dt);
+    const int restored = (dt == fabs(st->dt_rebound_leaves) || dt == fabs(st->dt_call_began));
+    return restored && pfvi_state_is_end(r, st);
+}
+
 static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_call* c){
     *c = (struct pfvi_call){.t_entry = r->t, .dt_entry = r->dt, .t_target = r->t + r->dt};
     c->finishing = (st->status_at_start == REB_STATUS_LAST_STEP);
@@ -994,12 +1002,15 @@ static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st
     const int loaded_end = c->eligible && c->finishing && st->end_N == 0
         && st->output_last_t1 != st->output_last_t0 && r->t == st->output_last_t1;
     c->at_end = c->shown || (c->eligible && c->finishing && (loaded_end || pfvi_state_is_end(r, st)));
-    if (c->eligible && !c->finishing && !c->shown && st->end_N == 0 && st->dt_proposed != 0. && r->dt != 0.
+    if (c->eligible && !c->finishing && !c->shown && st->dt_proposed != 0. && r->dt != 0.
             && st->output_last_t1 != st->output_last_t0 && r->t == st->output_last_t1
-            && fabs(r->dt) != fabs(st->dt_proposed)){
+            && fabs(r->dt) != fabs(st->dt_proposed) && (st->end_N == 0 || rebound_restored_at_end(r, st))){
         // Such a snapshot holds as sim.dt the cut REBOUND made to finish on
         // the next output (it writes it after deciding to finish, before the
         // call that does); the run would have gone on with its proposal.
+        // So does a call whose step ended exactly on its time: REBOUND cut
+        // nothing and restored its last full step or the dt the call began
+        // with, which would cap the next step (issue 42: 23 of 40 step ends).
         r->dt = copysign(st->dt_proposed, r->dt);
     }
     // (A value of REBOUND's own would cap the next step.)
@@ -1276,8 +1287,12 @@ static void pfvi_step(struct reb_simulation* r, void* state){
         st->dt_rebound_leaves = (r->dt_last_done != 0.) ? r->dt_last_done : st->dt_rebound_leaves;
     }
     st->last_finishing = finishing;
+    const int call_first = (r->dt_last_done == 0.) && !finishing;
     pfvi_step_model_keep(r, st);
     pfvi_step_take(r, st);
+    if (call_first){
+        st->dt_call_began = st->dt_at_start;
+    }
     if (!finishing){
         st->dt_rebound_leaves = r->dt;   // REBOUND keeps what the step left
     }
