@@ -1109,10 +1109,23 @@ struct pfvi_state {
     // the output is told from it and honoured (issue 40); 0: not known.
     double dt_rebound_leaves;
     // The sim.dt the last integrate() began with (REBOUND zeroes
-    // dt_last_done as a call begins: the step that finds it zero, not
+    // dt_last_done as integrate() begins: the step that finds it zero, not
     // finishing, is a call's first). REBOUND restores it where no step of the
-    // call was cut to finish: the run's step landed on the time itself.
+    // call was cut to finish: the run's step landed on the time itself. Taken
+    // for REBOUND's only where the next call is an integrate() too
+    // (call_is_integrate), since sim.steps() leaves dt_last_done as it is
+    // and a new simulation's first sim.steps() finds it zero as well: a
+    // user's sim.dt = 0.05 between steps(1) calls is the user's. Forgotten
+    // where any other call finds sim.dt changed.
     double dt_call_began;
+    // Set where the first call after a load or copy had its first step as
+    // its last: REBOUND cut sim.dt to finish before pfvi saw the value the
+    // call began with (the snapshot's), which it restores, as every later
+    // call whose first step is its last restores it again. Until an
+    // integrate() shows its first value, any sim.dt an integrate() finds is
+    // taken for that one.
+    int dt_call_unknown;
+    int call_is_integrate;         // this step's call found dt_last_done zero
     int last_finishing;
     size_t step_N;
     // Variational particles (REBOUND's r->particles_var, first and second

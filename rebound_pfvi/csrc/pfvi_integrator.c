@@ -976,12 +976,23 @@ static double output_near(const struct pfvi_state* st, double t, double step){
     return PFVI_OUTPUT_NEAR*span + PFVI_OUTPUT_NEAR_ULPS*DBL_EPSILON*fabs(t);
 }
 
-// The simulation is the run's last step's end, unedited, and sim.dt is a
-// value REBOUND restores after integrate() (pfvi_step), not one the user set.
-static int rebound_restored_at_end(const struct reb_simulation* r, const struct pfvi_state* st){
+// Whether sim.dt is known to be a value REBOUND restored after integrate()
+// (pfvi_step), not one the user set since; and whether such a value is known.
+static int rebound_restored(const struct reb_simulation* r, const struct pfvi_state* st){
     const double dt = fabs(r->dt);
-    const int restored = (dt == fabs(st->dt_rebound_leaves) || dt == fabs(st->dt_call_began));
-    return restored && pfvi_state_is_end(r, st);
+    return (st->dt_rebound_leaves != 0. && dt == fabs(st->dt_rebound_leaves))
+        || (st->call_is_integrate && st->dt_call_began != 0. && dt == fabs(st->dt_call_began))
+        || (st->call_is_integrate && st->dt_call_unknown);
+}
+
+static int rebound_restore_known(const struct pfvi_state* st){
+    return st->dt_rebound_leaves != 0. || (st->call_is_integrate && (st->dt_call_began != 0. || st->dt_call_unknown));
+}
+
+// The simulation is the run's last step's end, unedited, and sim.dt is a
+// value REBOUND restored, not one the user set.
+static int rebound_restored_at_end(const struct reb_simulation* r, const struct pfvi_state* st){
+    return rebound_restored(r, st) && pfvi_state_is_end(r, st);
 }
 
 static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_call* c){
@@ -992,8 +1003,7 @@ static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st
     // is honoured as after any edit, as IAS15 would: the shown state becomes
     // the user's and the step from it is capped by that dt.
     // (REBOUND flips its sign for a run backwards: a reversal, not a new dt.)
-    const int user_dt = !c->finishing && st->dt_rebound_leaves != 0.
-        && fabs(c->dt_entry) != fabs(st->dt_rebound_leaves);
+    const int user_dt = !c->finishing && rebound_restore_known(st) && !rebound_restored(r, st);
     c->shown = c->eligible && !user_dt && pfvi_output_is_shown(r, st);
     // (Compared only where an output may be shown from the last step's end.
     // A simulation loaded from an archive or copied keeps no end state: it
@@ -1287,11 +1297,24 @@ static void pfvi_step(struct reb_simulation* r, void* state){
         st->dt_rebound_leaves = (r->dt_last_done != 0.) ? r->dt_last_done : st->dt_rebound_leaves;
     }
     st->last_finishing = finishing;
-    const int call_first = (r->dt_last_done == 0.) && !finishing;
+    st->call_is_integrate = (r->dt_last_done == 0.);
+    if (!finishing && !st->call_is_integrate && fabs(r->dt) != fabs(st->dt_rebound_leaves)){
+        // sim.dt changed for a call that is not integrate(): the last call's are gone
+        st->dt_call_began = 0.;
+        st->dt_call_unknown = 0;
+    }
+    const int loaded = (st->end_N == 0);   // no step since a load or copy: a snapshot's sim.dt
     pfvi_step_model_keep(r, st);
     pfvi_step_take(r, st);
-    if (call_first){
-        st->dt_call_began = st->dt_at_start;
+    if (st->call_is_integrate){
+        if (!finishing){
+            st->dt_call_began = st->dt_at_start;
+            st->dt_call_unknown = 0;
+        }else if (loaded){
+            st->dt_call_unknown = 1;
+        }
+        // (A later call whose first step is its last began with what the
+        // call before left: what is known of it stands.)
     }
     if (!finishing){
         st->dt_rebound_leaves = r->dt;   // REBOUND keeps what the step left
