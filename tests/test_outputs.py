@@ -133,6 +133,55 @@ def test_an_output_on_a_step_end_leaves_the_run_bit_identical(build, T):
         assert state(mixed).tobytes() == state(one).tobytes(), f"step ends {ends[k]!r}, {ends[k + 1]!r}"
 
 
+def first_step(sim, call):
+    """The length of the first step `call` takes (a heartbeat's times)."""
+    times = []
+    sim.heartbeat = lambda p: times.append(p.contents.t)
+    t0 = sim.t
+    call()
+    sim.heartbeat = 0
+    return abs(times[1] - t0)
+
+
+@pytest.mark.parametrize("sequence", ["same dt before each integrate", "after a copy", "integrate twice, then steps",
+                                      "default dt after an output inside a step"])
+def test_a_users_dt_caps_whatever_came_before(sequence, tmp_path):
+    # A second hostile trial of the step-end mend: sequences where a user's
+    # sim.dt was taken for one REBOUND restored (the same value set again
+    # before each call, 0.376 instead of 0.01; a copy's first call one
+    # finishing step, 0.849 instead of 0.05; integrate() to the current time
+    # leaving dt_last_done zero before a steps(), 0.376 instead of 0.05).
+    sim = kepler(e=0.5, epsilon=1e-7)
+    ends = step_ends(lambda: kepler(e=0.5, epsilon=1e-7), 5.0)
+    u = 0.01
+    if sequence == "same dt before each integrate":
+        sim.dt = u
+        sim.integrate(0.37)
+        sim.dt = u
+        h = first_step(sim, lambda: sim.integrate(0.74))
+    elif sequence == "after a copy":
+        sim.integrate(ends[0] + 0.8*(ends[1] - ends[0]))
+        sim = sim.copy()
+        sim.integrate(ends[1])
+        u = 0.05
+        sim.dt = u
+        h = first_step(sim, lambda: sim.integrate(sim.t + 3.0))
+    elif sequence == "integrate twice, then steps":
+        u = 0.05
+        sim.dt = u
+        sim.integrate(0.37)
+        sim.integrate(0.37)
+        sim.dt = u
+        h = first_step(sim, lambda: sim.steps(1))
+    else:
+        u = 0.001
+        sim.integrate(0.37)
+        sim.steps(5)
+        sim.dt = u
+        h = first_step(sim, lambda: sim.integrate(sim.t + 3.0))
+    assert h <= u*(1 + 1e-12) + 8*np.spacing(sim.t)
+
+
 def test_a_snapshot_before_an_output_on_a_step_end_restarts_bit_identically(tmp_path):
     # An archive of every step holds, just before an output on the next step
     # end, the sim.dt REBOUND cut to finish there; restarted, the first call's

@@ -1109,23 +1109,30 @@ struct pfvi_state {
     // the output is told from it and honoured (issue 40); 0: not known.
     double dt_rebound_leaves;
     // The sim.dt the last integrate() began with (REBOUND zeroes
-    // dt_last_done as integrate() begins: the step that finds it zero, not
-    // finishing, is a call's first). REBOUND restores it where no step of the
-    // call was cut to finish: the run's step landed on the time itself. Taken
-    // for REBOUND's only where the next call is an integrate() too
-    // (call_is_integrate), since sim.steps() leaves dt_last_done as it is
-    // and a new simulation's first sim.steps() finds it zero as well: a
-    // user's sim.dt = 0.05 between steps(1) calls is the user's. Forgotten
-    // where any other call finds sim.dt changed.
+    // dt_last_done as integrate() begins: a step that finds it zero, not
+    // finishing, is a call's first), which REBOUND restores where no step of
+    // the call was cut to finish (the run's step landed on the time itself);
+    // kept only where it was pfvi's own value (its proposal, or a value
+    // REBOUND restored from one), never a value the user set: REBOUND
+    // restoring a user's sim.dt leaves the user's cap in place, and a user
+    // cannot set a value of pfvi's by chance. 0: none.
     double dt_call_began;
-    // Set where the first call after a load or copy had its first step as
-    // its last: REBOUND cut sim.dt to finish before pfvi saw the value the
-    // call began with (the snapshot's), which it restores, as every later
-    // call whose first step is its last restores it again. Until an
-    // integrate() shows its first value, any sim.dt an integrate() finds is
-    // taken for that one.
-    int dt_call_unknown;
-    int call_is_integrate;         // this step's call found dt_last_done zero
+    // dt_call_began is REBOUND's sim.dt of a new simulation (0.001), which
+    // the first step does not take for a cap: taken for REBOUND's only by an
+    // integrate() that finds the simulation still at the run's step end (a
+    // user may set 0.001 before a steps()).
+    int dt_call_default;
+    int call_is_integrate;   // this step's call found dt_last_done zero (integrate() begins so)
+    // The last sim.dt a step found that was neither pfvi's nor REBOUND's: the
+    // user's value. Never taken for REBOUND's restoring, even where REBOUND
+    // restores it (the user's cap stands) or the step it capped is REBOUND's
+    // last full one.
+    double dt_user;
+    // Where the first call after a load or copy had its first step as its
+    // last (REBOUND cut sim.dt to finish before pfvi saw the snapshot's),
+    // that cut: a snapshot written as REBOUND finished on an output holds
+    // the cut as sim.dt, and REBOUND restores it after the call.
+    double dt_call_cut;
     int last_finishing;
     size_t step_N;
     // Variational particles (REBOUND's r->particles_var, first and second

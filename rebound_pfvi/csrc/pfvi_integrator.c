@@ -344,6 +344,14 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "output_epsilon", offsetof(struct pfvi_state, output_epsilon), 0, 0, 0 },
     { "", REB_DOUBLE, "output_last_t0", offsetof(struct pfvi_state, output_last_t0), 0, 0, 0 },
     { "", REB_DOUBLE, "output_last_t1", offsetof(struct pfvi_state, output_last_t1), 0, 0, 0 },
+    // (The values REBOUND restores sim.dt to after integrate(), pfvi_step:
+    // a copy or restart tells them from a user's sim.dt as the run did.)
+    { "", REB_DOUBLE, "dt_rebound_leaves", offsetof(struct pfvi_state, dt_rebound_leaves), 0, 0, 0 },
+    { "", REB_DOUBLE, "dt_call_began", offsetof(struct pfvi_state, dt_call_began), 0, 0, 0 },
+    { "", REB_INT, "dt_call_default", offsetof(struct pfvi_state, dt_call_default), 0, 0, 0 },
+    { "", REB_DOUBLE, "dt_user", offsetof(struct pfvi_state, dt_user), 0, 0, 0 },
+    { "", REB_DOUBLE, "dt_call_cut", offsetof(struct pfvi_state, dt_call_cut), 0, 0, 0 },
+    { "", REB_INT, "last_finishing", offsetof(struct pfvi_state, last_finishing), 0, 0, 0 },
     { "", REB_INT, "predictor_stages", offsetof(struct pfvi_state, predictor_stages), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_h", offsetof(struct pfvi_state, predictor_h), 0, 0, 0 },
     { "", REB_DOUBLE, "predictor_t", offsetof(struct pfvi_state, predictor_t), 0, 0, 0 },
@@ -980,23 +988,26 @@ static double output_near(const struct pfvi_state* st, double t, double step){
     return PFVI_OUTPUT_NEAR*span + PFVI_OUTPUT_NEAR_ULPS*DBL_EPSILON*fabs(t);
 }
 
-// Whether sim.dt is known to be a value REBOUND restored after integrate()
-// (pfvi_step), not one the user set since; and whether such a value is known.
-static int rebound_restored(const struct reb_simulation* r, const struct pfvi_state* st){
+// Whether sim.dt is a value REBOUND restores after integrate() from one of
+// pfvi's own (pfvi_step), not one the user set; at_end: the simulation is
+// still the run's last step's end, unedited.
+static int rebound_restored(const struct reb_simulation* r, const struct pfvi_state* st, int at_end){
     const double dt = fabs(r->dt);
+    if (dt == st->dt_user){
+        return 0;
+    }
     return (st->dt_rebound_leaves != 0. && dt == fabs(st->dt_rebound_leaves))
-        || (st->call_is_integrate && st->dt_call_began != 0. && dt == fabs(st->dt_call_began))
-        || (st->call_is_integrate && st->dt_call_unknown);
+        || (st->dt_call_began != 0. && dt == fabs(st->dt_call_began)
+            && (!st->dt_call_default || (at_end && st->call_is_integrate)))
+        || (st->dt_call_cut != 0. && dt == fabs(st->dt_call_cut));
 }
 
 static int rebound_restore_known(const struct pfvi_state* st){
-    return st->dt_rebound_leaves != 0. || (st->call_is_integrate && (st->dt_call_began != 0. || st->dt_call_unknown));
+    return st->dt_rebound_leaves != 0. || (st->dt_call_began != 0. && !st->dt_call_default) || st->dt_call_cut != 0.;
 }
 
-// The simulation is the run's last step's end, unedited, and sim.dt is a
-// value REBOUND restored, not one the user set.
 static int rebound_restored_at_end(const struct reb_simulation* r, const struct pfvi_state* st){
-    return rebound_restored(r, st) && pfvi_state_is_end(r, st);
+    return rebound_restored(r, st, 1) && pfvi_state_is_end(r, st);
 }
 
 static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_call* c){
@@ -1007,7 +1018,9 @@ static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st
     // is honoured as after any edit, as IAS15 would: the shown state becomes
     // the user's and the step from it is capped by that dt.
     // (REBOUND flips its sign for a run backwards: a reversal, not a new dt.)
-    const int user_dt = !c->finishing && rebound_restore_known(st) && !rebound_restored(r, st);
+    // (A loaded or copied simulation's first call: its sim.dt is REBOUND's,
+    // as written with the snapshot; see below.)
+    const int user_dt = !c->finishing && st->end_N != 0 && rebound_restore_known(st) && !rebound_restored(r, st, 0);
     c->shown = c->eligible && !user_dt && pfvi_output_is_shown(r, st);
     // (Compared only where an output may be shown from the last step's end.
     // A simulation loaded from an archive or copied keeps no end state: it
@@ -1297,29 +1310,38 @@ static void pfvi_step(struct reb_simulation* r, void* state){
     // (what the last call left, unless the user set one since: then the
     // user's, honoured either way).
     const int finishing = (r->status == REB_STATUS_LAST_STEP);
-    if (finishing && !st->last_finishing){
-        st->dt_rebound_leaves = (r->dt_last_done != 0.) ? r->dt_last_done : st->dt_rebound_leaves;
+    if (finishing && !st->last_finishing && r->dt_last_done != 0.){
+        st->dt_rebound_leaves = r->dt_last_done;
+        // (REBOUND restores that, not the value the call began with.)
+        st->dt_call_began = 0.;
+        st->dt_call_default = 0;
     }
     st->last_finishing = finishing;
-    st->call_is_integrate = (r->dt_last_done == 0.);
-    if (!finishing && !st->call_is_integrate && fabs(r->dt) != fabs(st->dt_rebound_leaves)){
-        // sim.dt changed for a call that is not integrate(): the last call's are gone
-        st->dt_call_began = 0.;
-        st->dt_call_unknown = 0;
+    // What this call began with, if a call began here, and whether it was
+    // pfvi's own (read before the step changes the proposal).
+    const int call_start = (r->dt_last_done == 0.), loaded = (st->end_N == 0);
+    st->call_is_integrate = call_start;
+    const int began_proposed = st->dt_proposed != 0. && fabs(r->dt) == fabs(st->dt_proposed);
+    const int began_default = st->dt_proposed == 0. && r->dt == PFVI_REBOUND_DT_DEFAULT;
+    const int began_restored_own = rebound_restored(r, st, 0);
+    const int began_restored_default = !began_restored_own && rebound_restored(r, st, 1);
+    if (!finishing && !loaded && r->dt != 0. && !(began_proposed || began_default || began_restored_own
+            || began_restored_default)){
+        st->dt_user = fabs(r->dt);
     }
-    const int loaded = (st->end_N == 0);   // no step since a load or copy: a snapshot's sim.dt
     pfvi_step_model_keep(r, st);
     pfvi_step_take(r, st);
-    if (st->call_is_integrate){
-        if (!finishing){
-            st->dt_call_began = st->dt_at_start;
-            st->dt_call_unknown = 0;
-        }else if (loaded){
-            st->dt_call_unknown = 1;
-        }
-        // (A later call whose first step is its last began with what the
-        // call before left: what is known of it stands.)
+    if (call_start && !finishing){
+        const int own = began_proposed || began_restored_own;
+        const int by_default = !own && (began_default || began_restored_default);
+        st->dt_call_began = (own || by_default) ? st->dt_at_start : 0.;
+        st->dt_call_default = by_default;
+        st->dt_call_cut = 0.;
+    }else if (call_start && finishing && loaded){
+        st->dt_call_cut = st->dt_at_start;
     }
+    // (A later call whose first step is its last began with what the call
+    // before left: what is known of it stands.)
     if (!finishing){
         st->dt_rebound_leaves = r->dt;   // REBOUND keeps what the step left
     }
