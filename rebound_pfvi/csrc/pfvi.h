@@ -894,10 +894,16 @@ struct pfvi_replay {
 // The last this many are kept (a ring; older ones are not replayed).
 #define PFVI_REPLAY_MAX 256
 // A reversal meets a logged step where its t is within this fraction of the
-// step's length of the step's end: the way back's t drifts from the way
-// out's by the rounding of the intervals (9.4e-10 after 65 yr of a comet's
-// steps of 0.4 yr, measured); the replayed step lands on the logged start.
-#define PFVI_REPLAY_T_SLACK 1e-6
+// step's length of the step's end; the replayed step lands on the logged
+// start. The way back's grid drifts from the way out's: the rounding of the
+// intervals, grown by the varying track between logged steps (the Encke-like
+// comet at epsilon 1e-7, G = 1: 1e-13 of t at t = 329 to 8.4e-7, 2e-6 of
+// the step, at t = 184.6; docs/step-control.md). A way back that misses an
+// entry leaves it the newest, and no later one is replayed either: met
+// within 1e-6 of the step, this comet's way back missed that one and came
+// back 1.2e-6 off (3.1e-12 now). Grid points are steps apart, so a
+// hundredth of the step still names one.
+#define PFVI_REPLAY_T_SLACK 1e-2
 
 // Integrator state: settings, statistics and the controller's state are
 // REBOUND fields (saved in archives); the scratch grows only with N.
@@ -940,9 +946,9 @@ struct pfvi_state {
     // not saved in archives: a restarted run does not replay them).
     struct pfvi_replay replay[PFVI_REPLAY_MAX];
     size_t replay_first, replay_n;
-    // The last step was the first half of a split interval: the next, its
-    // second half, is logged too (pfvi_control.c; not saved in archives).
-    int replay_split_half;
+    // The next step is logged too: the last was the first half of a split
+    // interval, or restarted the track (pfvi_control.c; not saved in archives).
+    int replay_next;
     size_t replay_count[2];   // entries of the steps taken forward [0] and backward [1]
     // What the symmetric track's time lost to rounding: the state is at
     // r->t + t_compensation (0 if r->t is not t_compensated, the t it was

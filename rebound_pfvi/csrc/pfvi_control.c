@@ -909,9 +909,15 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     // track amplifies it: docs/solve.md; the retakes a split replaced were
     // such resynchronisations), and takes them as halves even where its own
     // checks, on ends that differ in the last bits, would not split.
-    const int split_half = split || st->replay_split_half;
-    st->replay_split_half = split;
-    if (asymmetric || split_half){
+    // So is the step after a restart of the track: it starts off the track,
+    // where the proposal caps it, so it is never split; the way back meets
+    // the same interval from its far end on a running track, takes it as
+    // whole and may split it (the crossing comet a = 4, f = 0 at the
+    // defaults: split at t = 177.5 on the way back only, then 9 more steps
+    // of its own, 1.3e-5 AU back; logged, 9.9e-13).
+    const int logged_too = st->replay_next;
+    st->replay_next = split || restart;
+    if (asymmetric || split || logged_too){
         // (A restart of the track and the steady hold's start or end are
         // logged too: the replay restores the track as it was before them.)
         before.t_end = r->t;
