@@ -137,3 +137,20 @@ def test_a_round_trip_across_splits_meets_every_logged_step():
     assert sim.integrator.n_rejected == out[1] and sim.integrator.n_asymmetric == out[2]
     assert sim.integrator.n_steps == 2*out[0]
     assert max(math.dist(a, p.xyz) for a, p in zip(start, sim.particles)) < 1e-9
+
+
+def test_a_round_trip_over_a_stretch_with_no_logged_step_is_pinned():
+    # At epsilon 1e-6 the way out logs nothing between t = 205.1 and 81.5:
+    # the way back's grid drifted a whole step from the way out's over that
+    # stretch, met the split at 81.5 off by 1.1 of its length and went on
+    # alone, 3.8e-7 back. Every 16th step is logged as a pin
+    # (PFVI_REPLAY_PIN_EVERY), replayed where the grid drifted by more than
+    # 1e-5 of the step: 2e-10 or less over the 30 round trips of
+    # docs/step-control.md (measured).
+    sim = _encke_like()
+    sim.integrator = "pfvi"
+    sim.integrator.epsilon = 1e-6
+    start = [p.xyz for p in sim.particles]
+    sim.integrate(410.0*16/30)
+    sim.integrate(0.0)
+    assert max(math.dist(a, p.xyz) for a, p in zip(start, sim.particles)) < 1e-9

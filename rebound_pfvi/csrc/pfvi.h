@@ -888,6 +888,7 @@ struct pfvi_steady {
 #define PFVI_FIELD_DECLARE(type, name) type name;
 struct pfvi_replay {
     double t_start, t_end, sign;
+    int pin;    // a time-symmetric step logged as a pin (PFVI_REPLAY_PIN_EVERY)
     PFVI_TRACK_FIELDS(PFVI_FIELD_DECLARE)
 };
 #undef PFVI_FIELD_DECLARE
@@ -904,6 +905,19 @@ struct pfvi_replay {
 // back 1.2e-6 off (3.1e-12 now). Grid points are steps apart, so a
 // hundredth of the step still names one.
 #define PFVI_REPLAY_T_SLACK 1e-2
+// Every this many steps a whole interval no other cause logs is logged as a
+// pin. A way back meeting a pin replays it only where its grid has drifted
+// from the way out's by more than PFVI_REPLAY_PIN_DRIFT of the step; else it
+// drops the pin and takes its own step, bit for bit as without pins. A
+// replayed step lands on the logged start: that resynchronises a drifted
+// grid, but on a grid that has not drifted it costs more than it mends (the
+// way back's times differ from the way out's by the rounding of rho +- kappa
+// G, up to 3e-12 on Kepler e = 0.5, which the symmetric steps undo by the
+// end of the trip and a replay makes permanent: pins replayed every 8 steps
+// took Kepler e = 0.91 from 7.4e-14 AU back to 2.9e-11; docs/step-control.md).
+// When the log is full a pin goes first.
+#define PFVI_REPLAY_PIN_EVERY 16
+#define PFVI_REPLAY_PIN_DRIFT 1e-5
 
 // Integrator state: settings, statistics and the controller's state are
 // REBOUND fields (saved in archives); the scratch grows only with N.
