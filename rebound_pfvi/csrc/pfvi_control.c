@@ -544,23 +544,11 @@ void pfvi_replay_clear(struct pfvi_state* st){
     st->replay_count[0] = st->replay_count[1] = 0;
 }
 
-static void replay_remove(struct pfvi_state* st, size_t k);
-
 static void replay_push(struct pfvi_state* st, const struct pfvi_replay* e){
     if (st->replay_n == PFVI_REPLAY_MAX){
-        // The oldest pin goes, or else the oldest entry (the oldest first:
-        // at its place, a pin goes without moving the others).
-        size_t k = 0;
-        while (k < st->replay_n && !st->replay[(st->replay_first + k) % PFVI_REPLAY_MAX].pin){
-            k++;
-        }
-        if (k > 0 && k < st->replay_n){
-            replay_remove(st, k);
-        }else{
-            st->replay_count[replay_side(st->replay[st->replay_first].sign)]--;
-            st->replay_first = (st->replay_first + 1) % PFVI_REPLAY_MAX;   // the oldest goes
-            st->replay_n--;
-        }
+        st->replay_count[replay_side(st->replay[st->replay_first].sign)]--;
+        st->replay_first = (st->replay_first + 1) % PFVI_REPLAY_MAX;   // the oldest goes
+        st->replay_n--;
     }
     st->replay[(st->replay_first + st->replay_n) % PFVI_REPLAY_MAX] = *e;
     st->replay_n++;
