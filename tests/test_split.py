@@ -104,3 +104,53 @@ def test_a_drag_force_runs_through_a_restarted_track(drag):
     sim.integrate(110.0)
     assert sim.t == 110.0
     assert all(math.isfinite(c) for p in sim.particles for c in p.xyz)
+
+
+def _encke_like():
+    # benchmarks/comet_phases.py's comet among Venus, Earth, Mars and Jupiter, with G = 1
+    # (a comet period 20.5): the system of the round trips in docs/step-control.md.
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    for m, a, e, M in ((2.45e-6, 0.723, 0.007, 1.0), (3.0e-6, 1.0, 0.017, 2.0), (3.2e-7, 1.524, 0.093, 3.0),
+                       (9.55e-4, 5.203, 0.048, 4.0)):
+        sim.add(m=m, a=a, e=e, M=M)
+    sim.add(m=0.0, a=2.2, e=0.85, inc=math.radians(12.0), omega=3.0, M=0.5)
+    sim.move_to_com()
+    return sim
+
+
+def test_a_round_trip_across_splits_meets_every_logged_step():
+    # Between the logged steps (the splits' halves, the drift corrections)
+    # the way back's grid drifts from the way out's: 1e-13 of t at t = 329
+    # grew to 8.4e-7 (2e-6 of the step) at t = 184.6, where a split was
+    # logged. Met within 1e-6 of the step, the way back missed it, and every
+    # logged step before it: its own splits, 1.2e-6 back. Met within 1e-2 of
+    # the step (PFVI_REPLAY_T_SLACK), 3.1e-12 (measured), and no step of its own.
+    sim = _encke_like()
+    sim.integrator = "pfvi"
+    sim.integrator.epsilon = 1e-7
+    start = [p.xyz for p in sim.particles]
+    sim.integrate(410.0)
+    out = (sim.integrator.n_steps, sim.integrator.n_rejected, sim.integrator.n_asymmetric)
+    assert out[1] > 0   # (splits among them)
+    sim.integrate(0.0)
+    assert sim.integrator.n_rejected == out[1] and sim.integrator.n_asymmetric == out[2]
+    assert sim.integrator.n_steps == 2*out[0]
+    assert max(math.dist(a, p.xyz) for a, p in zip(start, sim.particles)) < 1e-9
+
+
+def test_a_round_trip_over_a_stretch_with_no_logged_step_is_pinned():
+    # At epsilon 1e-6 the way out logs nothing between t = 205.1 and 81.5:
+    # the way back's grid drifted a whole step from the way out's over that
+    # stretch, met the split at 81.5 off by 1.1 of its length and went on
+    # alone, 3.8e-7 back. Every 16th step is logged as a pin
+    # (PFVI_REPLAY_PIN_EVERY), replayed where the grid drifted by more than
+    # 1e-5 of the step: 2e-10 or less over the 30 round trips of
+    # docs/step-control.md (measured).
+    sim = _encke_like()
+    sim.integrator = "pfvi"
+    sim.integrator.epsilon = 1e-6
+    start = [p.xyz for p in sim.particles]
+    sim.integrate(410.0*16/30)
+    sim.integrate(0.0)
+    assert max(math.dist(a, p.xyz) for a, p in zip(start, sim.particles)) < 1e-9

@@ -888,16 +888,39 @@ struct pfvi_steady {
 #define PFVI_FIELD_DECLARE(type, name) type name;
 struct pfvi_replay {
     double t_start, t_end, sign;
+    int pin;    // a time-symmetric step logged as a pin (PFVI_REPLAY_PIN_EVERY)
     PFVI_TRACK_FIELDS(PFVI_FIELD_DECLARE)
 };
 #undef PFVI_FIELD_DECLARE
-// The last this many are kept (a ring; older ones are not replayed).
-#define PFVI_REPLAY_MAX 256
+// The last this many are kept (a ring; older ones are not replayed; 232
+// bytes each). With a pin every PFVI_REPLAY_PIN_EVERY steps they span 16384
+// steps of pins alone (256 spanned 4096: the Encke-like comet in REBOUND's
+// units, 5100 steps to t = 410 at epsilon 1e-7, lost its oldest pins and
+// came back 1.5e-4 off on 11 of 30 round trips; none now, 4.1e-10).
+#define PFVI_REPLAY_MAX 1024
 // A reversal meets a logged step where its t is within this fraction of the
-// step's length of the step's end: the way back's t drifts from the way
-// out's by the rounding of the intervals (9.4e-10 after 65 yr of a comet's
-// steps of 0.4 yr, measured); the replayed step lands on the logged start.
-#define PFVI_REPLAY_T_SLACK 1e-6
+// step's length of the step's end; the replayed step lands on the logged
+// start. The way back's grid drifts from the way out's: the rounding of the
+// intervals, grown by the varying track between logged steps (the Encke-like
+// comet at epsilon 1e-7, G = 1: 1e-13 of t at t = 329 to 8.4e-7, 2e-6 of
+// the step, at t = 184.6; docs/step-control.md). A way back that misses an
+// entry leaves it the newest, and no later one is replayed either: met
+// within 1e-6 of the step, this comet's way back missed that one and came
+// back 1.2e-6 off (3.1e-12 now). Grid points are steps apart, so a
+// hundredth of the step still names one.
+#define PFVI_REPLAY_T_SLACK 1e-2
+// Every this many steps a whole interval no other cause logs is logged as a
+// pin. A way back meeting a pin replays it only where its grid has drifted
+// from the way out's by more than PFVI_REPLAY_PIN_DRIFT of the step; else it
+// drops the pin and takes its own step, bit for bit as without pins. A
+// replayed step lands on the logged start: that resynchronises a drifted
+// grid, but on a grid that has not drifted it costs more than it mends (the
+// way back's times differ from the way out's by the rounding of rho +- kappa
+// G, up to 3e-12 on Kepler e = 0.5, which the symmetric steps undo by the
+// end of the trip and a replay makes permanent: pins replayed every 8 steps
+// took Kepler e = 0.91 from 7.4e-14 AU back to 2.9e-11; docs/step-control.md).
+#define PFVI_REPLAY_PIN_EVERY 16
+#define PFVI_REPLAY_PIN_DRIFT 1e-5
 
 // Integrator state: settings, statistics and the controller's state are
 // REBOUND fields (saved in archives); the scratch grows only with N.
@@ -940,9 +963,9 @@ struct pfvi_state {
     // not saved in archives: a restarted run does not replay them).
     struct pfvi_replay replay[PFVI_REPLAY_MAX];
     size_t replay_first, replay_n;
-    // The last step was the first half of a split interval: the next, its
-    // second half, is logged too (pfvi_control.c; not saved in archives).
-    int replay_split_half;
+    // The next step is logged too: the last was the first half of a split
+    // interval, or restarted the track (pfvi_control.c; not saved in archives).
+    int replay_next;
     size_t replay_count[2];   // entries of the steps taken forward [0] and backward [1]
     // What the symmetric track's time lost to rounding: the state is at
     // r->t + t_compensation (0 if r->t is not t_compensated, the t it was

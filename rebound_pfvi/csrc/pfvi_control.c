@@ -680,7 +680,12 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         const long due = replay_due(st, t0, sign);
         const struct pfvi_replay entry = (due >= 0) ? st->replay[(st->replay_first + (size_t)due) % PFVI_REPLAY_MAX]
             : (struct pfvi_replay){0};
-        const struct pfvi_replay* const e = (due >= 0) ? &entry : NULL;
+        const struct pfvi_replay* e = (due >= 0) ? &entry : NULL;
+        if (e && e->pin && !(fabs(t0 - e->t_end) > PFVI_REPLAY_PIN_DRIFT*fabs(e->t_end - e->t_start))){
+            // A pin met on the way out's grid: nothing to resynchronise.
+            replay_remove(st, (size_t)due);
+            e = NULL;
+        }
         // (The track may be off where the way out restarted it: the entry's
         // own kappa, if it had a track, says it is this run's.)
         if (e && (e->track_kappa == kappa || !(e->rho > 0.))){
@@ -713,12 +718,17 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
                     pfvi_roll_back(r, st, N, t0);
                 }
             }
-            pfvi_replay_clear(st);   // not replayed: the log no longer describes the way back
+            if (e->pin){
+                replay_remove(st, (size_t)due);   // (a pin not replayed: the way back goes on as without it)
+            }else{
+                pfvi_replay_clear(st);   // not replayed: the log no longer describes the way back
+            }
         }
     }
     struct pfvi_replay before;
     before.t_start = t0;
     before.sign = sign;
+    before.pin = 0;
     replay_keep(st, &before);
     double h = fmin(t.remaining, cap);
     // The state is at t0 + t_lo: a step capped to reach t0 + sign cap goes
@@ -909,9 +919,19 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     // track amplifies it: docs/solve.md; the retakes a split replaced were
     // such resynchronisations), and takes them as halves even where its own
     // checks, on ends that differ in the last bits, would not split.
-    const int split_half = split || st->replay_split_half;
-    st->replay_split_half = split;
-    if (asymmetric || split_half){
+    // So is the step after a restart of the track: it starts off the track,
+    // where the proposal caps it, so it is never split; the way back meets
+    // the same interval from its far end on a running track, takes it as
+    // whole and may split it (the crossing comet a = 4, f = 0 at the
+    // defaults: split at t = 177.5 on the way back only, then 9 more steps
+    // of its own, 1.3e-5 AU back; logged, 9.9e-13).
+    const int logged_too = st->replay_next;
+    st->replay_next = split || restart;
+    // A pin (PFVI_REPLAY_PIN_EVERY): a whole interval, on the way out (not
+    // while a way back retraces logged steps).
+    before.pin = !(asymmetric || split || logged_too) && !restart && !capped && full && t.done == 0.
+        && st->replay_count[replay_side(-sign)] == 0 && (st->statistics.n_steps + 1) % PFVI_REPLAY_PIN_EVERY == 0;
+    if (asymmetric || split || logged_too || before.pin){
         // (A restart of the track and the steady hold's start or end are
         // logged too: the replay restores the track as it was before them.)
         before.t_end = r->t;

@@ -417,7 +417,7 @@ void pfvi_forget_edited(const struct reb_simulation* r, struct pfvi_state* st){
         st->density_scale = 1.;
         st->density_N = 0;
         pfvi_replay_clear(st);  // nor does the way so far
-        st->replay_split_half = 0;
+        st->replay_next = 0;
     }
 }
 
