@@ -1020,8 +1020,10 @@ static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st
     // (REBOUND flips its sign for a run backwards: a reversal, not a new dt.)
     // (A loaded or copied simulation's first call: its sim.dt is REBOUND's,
     // as written with the snapshot; see below.)
-    const int user_dt = !c->finishing && st->end_N != 0 && rebound_restore_known(st) && !rebound_restored(r, st, 0);
-    c->shown = c->eligible && !user_dt && pfvi_output_is_shown(r, st);
+    // (Asked only where an output is held: mid-run, nothing is.)
+    c->shown = c->eligible && st->output_N != 0
+        && !(!c->finishing && st->end_N != 0 && rebound_restore_known(st) && !rebound_restored(r, st, 0))
+        && pfvi_output_is_shown(r, st);
     // (Compared only where an output may be shown from the last step's end.
     // A simulation loaded from an archive or copied keeps no end state: it
     // is at the last step's end if t is where that step ended, as REBOUND
@@ -1321,10 +1323,12 @@ static void pfvi_step(struct reb_simulation* r, void* state){
     // pfvi's own (read before the step changes the proposal).
     const int call_start = (r->dt_last_done == 0.), loaded = (st->end_N == 0);
     st->call_is_integrate = call_start;
+    // (Mid-run, sim.dt is the proposal: the rest is not asked.)
     const int began_proposed = st->dt_proposed != 0. && fabs(r->dt) == fabs(st->dt_proposed);
-    const int began_default = st->dt_proposed == 0. && r->dt == PFVI_REBOUND_DT_DEFAULT;
-    const int began_restored_own = rebound_restored(r, st, 0);
-    const int began_restored_default = !began_restored_own && rebound_restored(r, st, 1);
+    const int began_default = !began_proposed && st->dt_proposed == 0. && r->dt == PFVI_REBOUND_DT_DEFAULT;
+    const int began_restored_own = !began_proposed && !began_default && rebound_restored(r, st, 0);
+    const int began_restored_default = !began_proposed && !began_default && !began_restored_own
+        && rebound_restored(r, st, 1);
     if (!finishing && !loaded && r->dt != 0. && !(began_proposed || began_default || began_restored_own
             || began_restored_default)){
         st->dt_user = fabs(r->dt);
