@@ -16,8 +16,10 @@ import sys
 import rebound_pfvi  # noqa: F401
 from rebound_pfvi import scenes
 
-def build(M):
-    sim = scenes.new_simulation()
+def build(M, sim=None):
+    """The comet at mean anomaly M among the planets, in a new simulation of
+    the scenes' units, or added to `sim` (tests/test_split.py's G = 1)."""
+    sim = scenes.new_simulation() if sim is None else sim
     sim.add(m=1.0)
     for m, a, e, Mp in ((2.45e-6, 0.723, 0.007, 1.0), (3.0e-6, 1.0, 0.017, 2.0), (3.2e-7, 1.524, 0.093, 3.0), (9.55e-4, 5.203, 0.048, 4.0)):
         sim.add(m=m, a=a, e=e, M=Mp)
@@ -34,8 +36,14 @@ def one(M, eps):
     err = max(math.dist((p.x, p.y, p.z), (q.x, q.y, q.z)) for p, q in zip(sim.particles, ref.particles))
     return err/(eps*2.2*20), sim.integrator.n_steps + sim.integrator.n_rejected
 
-for eps in map(float, sys.argv[1].split(",")):
-    errs, work = [], 0
-    for k in range(int(sys.argv[2]) if len(sys.argv) > 2 else 8):
-        e, w = one(0.5 + 0.7*k, eps); errs.append(e); work += w
-    print(f"eps {eps:g}: errors {' '.join(f'{e:.2g}' for e in errs)} | max {max(errs):.3g} median {statistics.median(errs):.3g} over3 {sum(e>3 for e in errs)} work {work}", flush=True)
+def main():
+    for eps in map(float, sys.argv[1].split(",")):
+        errs, work = [], 0
+        for k in range(int(sys.argv[2]) if len(sys.argv) > 2 else 8):
+            e, w = one(0.5 + 0.7*k, eps); errs.append(e); work += w
+        print(f"eps {eps:g}: errors {' '.join(f'{e:.2g}' for e in errs)} | max {max(errs):.3g} "
+              f"median {statistics.median(errs):.3g} over3 {sum(e>3 for e in errs)} work {work}", flush=True)
+
+
+if __name__ == "__main__":
+    main()

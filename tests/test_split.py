@@ -11,11 +11,16 @@ flip after a split and a drag force through a restarted track (both found
 by a hostile trial of the split).
 """
 import math
+import sys
+from pathlib import Path
 
 import pytest
 import rebound
 
 import rebound_pfvi  # noqa: F401  (registers "pfvi")
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+import comet_phases  # noqa: E402
 
 # m, a, e, inc, Omega, omega, f about a star of mass 1 (G = 1)
 BODIES = [(3.8306e-06, 0.693459, 0.880306, 0.198866, 6.12635, 1.88775, 3.89351),
@@ -109,14 +114,7 @@ def test_a_drag_force_runs_through_a_restarted_track(drag):
 def _encke_like():
     # benchmarks/comet_phases.py's comet among Venus, Earth, Mars and Jupiter, with G = 1
     # (a comet period 20.5): the system of the round trips in docs/step-control.md.
-    sim = rebound.Simulation()
-    sim.add(m=1.0)
-    for m, a, e, M in ((2.45e-6, 0.723, 0.007, 1.0), (3.0e-6, 1.0, 0.017, 2.0), (3.2e-7, 1.524, 0.093, 3.0),
-                       (9.55e-4, 5.203, 0.048, 4.0)):
-        sim.add(m=m, a=a, e=e, M=M)
-    sim.add(m=0.0, a=2.2, e=0.85, inc=math.radians(12.0), omega=3.0, M=0.5)
-    sim.move_to_com()
-    return sim
+    return comet_phases.build(0.5, rebound.Simulation())
 
 
 def test_a_round_trip_across_splits_meets_every_logged_step():
