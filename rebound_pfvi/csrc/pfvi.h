@@ -1006,6 +1006,9 @@ struct pfvi_state {
     double* omega_fit;
     struct pfvi_centre* centre;    // each particle's centre in this step
     struct pfvi_partner* partners; // each particle's partner at the step's start (time scales, centres)
+    // The partners at the start of the step being taken, for the resolution
+    // check of the symmetric control, which reads both ends' (pfvi_control.c).
+    struct pfvi_partner* partners_start;
     struct reb_vec6d* images;      // the ghost boxes' shifts (pfvi_field_of)
     size_t images_allocated;
     double* omega_end;

@@ -38,6 +38,7 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->omega_fit);
     free(st->centre);
     free(st->partners);
+    free(st->partners_start);
     free(st->images);
     free(st->omega_end);
     free(st->osculating_start);
@@ -125,6 +126,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->omega_fit = pfvi_grow(st->omega_fit, N*sizeof(*st->omega_fit), &ok);
     st->centre = pfvi_grow(st->centre, N*sizeof(*st->centre), &ok);
     st->partners = pfvi_grow(st->partners, N*sizeof(*st->partners), &ok);
+    st->partners_start = pfvi_grow(st->partners_start, N*sizeof(*st->partners_start), &ok);
     st->omega_end = pfvi_grow(st->omega_end, N*sizeof(*st->omega_end), &ok);
     st->osculating_start = pfvi_grow(st->osculating_start, N*sizeof(*st->osculating_start), &ok);
     st->unknowns = pfvi_grow(st->unknowns, N*sizeof(*st->unknowns), &ok);
