@@ -1011,6 +1011,13 @@ static int rebound_restored_at_end(const struct reb_simulation* r, const struct 
     return rebound_restored(r, st, 1) && pfvi_state_is_end(r, st);
 }
 
+// A sim.dt the user set since the last call: one REBOUND could not have
+// restored. (Not on a finishing step, whose sim.dt REBOUND cut; nor on a
+// loaded or copied simulation's first call, whose sim.dt is the snapshot's.)
+static int user_set_dt(const struct reb_simulation* r, const struct pfvi_state* st, const struct pfvi_call* c){
+    return !c->finishing && st->end_N != 0 && rebound_restore_known(st) && !rebound_restored(r, st, 0);
+}
+
 static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_call* c){
     *c = (struct pfvi_call){.t_entry = r->t, .dt_entry = r->dt, .t_target = r->t + r->dt};
     c->finishing = (st->status_at_start == REB_STATUS_LAST_STEP);
@@ -1019,12 +1026,8 @@ static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st
     // is honoured as after any edit, as IAS15 would: the shown state becomes
     // the user's and the step from it is capped by that dt.
     // (REBOUND flips its sign for a run backwards: a reversal, not a new dt.)
-    // (A loaded or copied simulation's first call: its sim.dt is REBOUND's,
-    // as written with the snapshot; see below.)
     // (Asked only where an output is held: mid-run, nothing is.)
-    c->shown = c->eligible && st->output_N != 0
-        && !(!c->finishing && st->end_N != 0 && rebound_restore_known(st) && !rebound_restored(r, st, 0))
-        && pfvi_output_is_shown(r, st);
+    c->shown = c->eligible && st->output_N != 0 && !user_set_dt(r, st, c) && pfvi_output_is_shown(r, st);
     // (Compared only where an output may be shown from the last step's end.
     // A simulation loaded from an archive or copied keeps no end state: it
     // is at the last step's end if t is where that step ended, as REBOUND
