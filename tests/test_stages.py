@@ -394,3 +394,38 @@ def test_iterations_per_solve_at_fixed_steps(s, per_orbit, most):
     sim.dt = sim.particles[1].P / per_orbit
     sim.steps(10 * per_orbit)
     assert sim.integrator.iterations_mean <= most, sim.integrator.iterations_mean
+
+
+def test_the_stage_rule_made_once_per_process_gives_every_thread_the_same_bits():
+    """Each s's rule is made once per process and copied after
+    (pfvi_fitting.c): simulations started at once in threads of a fresh
+    process (two per s, racing to make it) end bit-identical to the same
+    runs made one after another once every rule is made."""
+    import subprocess
+    import sys
+    import textwrap
+
+    code = textwrap.dedent("""
+        import threading, rebound, rebound_pfvi
+        def run(s, out):
+            sim = rebound.Simulation()
+            sim.add(m=1.0)
+            sim.add(m=1e-3, a=1.0, e=0.6, f=0.3)
+            sim.integrator = "pfvi"
+            sim.integrator.stages = s
+            sim.integrate(20.0)
+            p = sim.particles[1]
+            out[(s, len(out))] = (p.x, p.y, p.vx, p.vy, sim.t)
+        together = {}
+        threads = [threading.Thread(target=run, args=(s, together)) for s in range(2, 9) for _ in range(2)]
+        for t in threads: t.start()
+        for t in threads: t.join()
+        after = {}
+        for s in range(2, 9): run(s, after)
+        by_s = {}
+        for (s, _), v in together.items(): by_s.setdefault(s, set()).add(v)
+        ok = all(by_s[s] == {v} for (s, _), v in after.items())
+        print("SAME" if ok and len(together) == 14 else f"DIFFER {by_s} {after}")
+    """)
+    out = subprocess.run([sys.executable, "-P", "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.stdout.strip() == "SAME", out.stdout + out.stderr[-2000:]

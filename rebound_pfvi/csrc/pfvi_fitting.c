@@ -319,14 +319,52 @@ void pfvi_stage_solve(const struct pfvi_stage_fit* fit, int m, double* b){
     }
 }
 
-int pfvi_stage_rule(int s, struct pfvi_lobatto* rule, struct pfvi_stage_fit* classical){
+// The rule and its classical fit depend on s alone. Made in long double
+// they cost about 120k instructions, which the first step of every new
+// simulation paid (a tenth of a short run's time); so each s is made once
+// per process and copied after, the same bits. A thread that finds an entry
+// not yet ready makes its own copy and publishes it only if no other thread
+// has begun to (GCC's atomics: the core is C99).
+enum { RULE_EMPTY, RULE_MAKING, RULE_READY };
+static struct {
+    struct pfvi_lobatto rule;
+    struct pfvi_stage_fit classical;
+} rule_made[PFVI_STAGES_MAX + 1];
+static int rule_made_state[PFVI_STAGES_MAX + 1];
+
+static int stage_rule_make(int s, struct pfvi_lobatto* rule, struct pfvi_stage_fit* classical){
     if (!pfvi_lobatto_compute(s, rule)){
         return 0;
     }
-    struct pfvi_stage_fit scratch;
-    pfvi_stage_fit_at(rule, 0., PFVI_FITTING_NONE, classical ? classical : &scratch, &rule->det_classical);
+    pfvi_stage_fit_at(rule, 0., PFVI_FITTING_NONE, classical, &rule->det_classical);
+    classical->omega = 0.;
+    return 1;
+}
+
+int pfvi_stage_rule(int s, struct pfvi_lobatto* rule, struct pfvi_stage_fit* classical){
+    if (s < PFVI_STAGES_MIN || s > PFVI_STAGES_MAX){
+        return 0;
+    }
+    if (__atomic_load_n(&rule_made_state[s], __ATOMIC_ACQUIRE) != RULE_READY){
+        struct pfvi_stage_fit fit;
+        if (!stage_rule_make(s, rule, &fit)){
+            return 0;
+        }
+        if (classical){
+            *classical = fit;
+        }
+        int expected = RULE_EMPTY;
+        if (__atomic_compare_exchange_n(&rule_made_state[s], &expected, RULE_MAKING, 0, __ATOMIC_ACQ_REL,
+                    __ATOMIC_ACQUIRE)){
+            rule_made[s].rule = *rule;
+            rule_made[s].classical = fit;
+            __atomic_store_n(&rule_made_state[s], RULE_READY, __ATOMIC_RELEASE);
+        }
+        return 1;
+    }
+    *rule = rule_made[s].rule;
     if (classical){
-        classical->omega = 0.;
+        *classical = rule_made[s].classical;
     }
     return 1;
 }

@@ -447,9 +447,13 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
 
 static void* pfvi_create(void){
     struct pfvi_state* st = calloc(1, sizeof(struct pfvi_state));
-    if (!st){
+    struct pfvi_replay* replay = malloc(PFVI_REPLAY_MAX*sizeof(*replay));
+    if (!st || !replay){
+        free(st);
+        free(replay);
         return NULL;
     }
+    st->replay = replay;
     st->settings = (struct pfvi_options){
         .fitting = PFVI_FITTING_NONE,
         .frequency = PFVI_FREQUENCY_MEAN_MOTION,

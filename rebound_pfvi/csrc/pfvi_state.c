@@ -15,6 +15,7 @@
 #include "boundary.h"
 
 void pfvi_state_free(struct pfvi_state* st){
+    free(st->replay);
     free(st->contact_bodies);
     free(st->contact_order);
     free(st->contact_compensation);
