@@ -391,8 +391,9 @@ def kepler_planets():
 def test_a_refused_step_after_an_output_leaves_the_output_shown():
     # The force turns non-finite (a callback pfvi cannot see change) while
     # an output is shown: an output inside the step is refused with the
-    # simulation as the call found it, bit for bit; a call past the step
-    # takes up the run's state (a step of its own), then refuses the next.
+    # simulation as the call found it, bit for bit; so is a call past the
+    # step (the forces at the run's state, evaluated to see whether they
+    # changed since the output, are not finite: pfvi_output_forces_hold).
     broken = {"on": False}
 
     def force(sim_pointer):
@@ -410,7 +411,7 @@ def test_a_refused_step_after_an_output_leaves_the_output_shown():
     assert (sim.t, state(sim).tobytes()) == before
     with pytest.raises(RuntimeError):
         sim.integrate(2.0)
-    assert sim.t == t_real
+    assert (sim.t, state(sim).tobytes()) == before
     broken["on"] = False
     sim.integrate(2.0)  # and goes on from there
     assert sim.t == 2.0
@@ -505,3 +506,124 @@ def test_outputs_from_a_large_t_are_the_requested_times():
         ref.integrate(sim.t - t0)
         worst = max(worst, largest_difference(sim, ref))
     assert worst < 1e-6   # (2.7e-3 before, with 3000 outputs; IAS15 itself 1e-4 there)
+
+
+def _two_planets():
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=0.5)
+    sim.add(m=1e-3, a=2.2, e=0.1, inc=0.2)
+    sim.move_to_com()
+    return sim
+
+
+def _with_force(integrator, change_at, velocity_dependent):
+    """A force read from a variable the callback owns, changed at an output."""
+    k = {"on": 0.0}
+
+    def force(sim_pointer):
+        p = sim_pointer.contents.particles[1]
+        if velocity_dependent:
+            p.ax -= k["on"]*p.vx
+            p.ay -= k["on"]*p.vy
+        else:
+            p.ax += k["on"]
+
+    sim = _two_planets()
+    sim.additional_forces = force
+    sim.force_is_velocity_dependent = int(velocity_dependent)
+    sim.integrator = integrator
+    sim.integrator.epsilon = 1e-10 if integrator == "pfvi" else 1e-12
+    sim.integrate(change_at)
+    k["on"] = 0.02
+    sim.integrate(9.7)
+    return state(sim)
+
+
+@pytest.mark.parametrize("velocity_dependent", [False, True])
+@pytest.mark.parametrize("change_at", [3.3, 5.05])
+def test_a_force_changed_between_calls_acts_from_the_output(change_at, velocity_dependent):
+    # The run's step past the output was made with the old force; one
+    # evaluation at its state shows the change, and the run goes on from the
+    # output as after an edit (before: from the step's end, 2.4e-3 off IAS15).
+    pfvi = _with_force("pfvi", change_at, velocity_dependent)
+    ias15 = _with_force("ias15", change_at, velocity_dependent)
+    assert np.max(np.abs(pfvi[:, :3] - ias15[:, :3])) < 1e-9*np.max(np.abs(ias15[:, :3]))
+
+
+@pytest.mark.parametrize("velocity_dependent", [False, True])
+def test_an_unchanged_force_keeps_the_run_independent_of_its_outputs(velocity_dependent):
+    # The check evaluates the force again at the run's state; with nothing
+    # changed it finds the step's bits (with a velocity-dependent force: the
+    # evaluation made when the output was shown), so the run is not restarted
+    # at any output: 40 outputs take the steps of one call (a check that
+    # misfired took 113 steps for 44 here). With a velocity-dependent force
+    # the run with outputs ends 7e-15 from the single call, as in the build
+    # before the check: not the check's (noticed, not mended).
+    def build():
+        sim = _two_planets()
+
+        def force(sim_pointer):
+            p = sim_pointer.contents.particles[1]
+            p.ax -= 1e-3*p.vx if velocity_dependent else -1e-4
+        sim.additional_forces = force
+        sim.force_is_velocity_dependent = int(velocity_dependent)
+        sim.integrator = "pfvi"
+        sim.integrator.epsilon = 1e-9
+        return sim
+
+    one, many = build(), build()
+    one.integrate(12.0)
+    for t in np.linspace(0.3, 12.0, 40):
+        many.integrate(t)
+    assert many.integrator.n_outputs >= 30
+    assert many.integrator.n_steps == one.integrator.n_steps
+    if velocity_dependent:
+        assert np.max(np.abs(state(many) - state(one))) < 1e-13
+    else:
+        assert state(many).tobytes() == state(one).tobytes()
+
+
+def _approach():
+    # Two planets whose closest approach is 0.2852 at t = 5.24; IAS15's
+    # contact (and pfvi's with the search on from the start) at 5.215.
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=0.0)
+    sim.add(m=1e-3, a=1.3, e=0.0, f=1.2)
+    sim.move_to_com()
+    sim.integrator = "pfvi"
+    sim.integrator.epsilon = 1e-10
+    return sim
+
+
+@pytest.mark.parametrize("how", ["exit_min_distance", "radii"])
+def test_a_contact_search_set_at_an_output_searches_the_rest_of_the_step(how):
+    limit = 0.29
+
+    def arm(sim):
+        if how == "exit_min_distance":
+            sim.exit_min_distance = limit
+        else:
+            sim.collision = "direct"
+            sim.collision_resolve = "halt"
+            for p in sim.particles[1:]:
+                p.r = limit/2
+
+    def contact(sim, t_out):
+        if t_out is None:
+            arm(sim)
+        else:
+            sim.integrate(t_out)
+            arm(sim)
+        with pytest.raises((rebound.Encounter, rebound.Collision)):
+            sim.integrate(20.0)
+        return sim.t
+
+    first = contact(_approach(), None)
+    for t_out in np.linspace(first - 1.0, first - 0.01, 9):
+        # (each output inside one of the run's steps, or on its end)
+        # (From the output the run restarts: its contact time moves by the
+        # output step's error, 1.3e-9 here; before, the contact was missed or
+        # found 0.016 late.)
+        assert contact(_approach(), t_out) == pytest.approx(first, abs=1e-7)

@@ -640,6 +640,16 @@ struct pfvi_output_particle {
     double a[3];  // the run's state: the acceleration the next step starts from
 };
 
+// What else an output was shown with, per particle (pfvi_output_is_shown,
+// pfvi_output_forces_hold): its radius (a contact search the run's step past
+// the output did not make), and, with velocity-dependent forces pfvi cannot
+// see into, the forces at the run's state as evaluated when the output was
+// shown (the kept a[] is the end stage's, at the stage velocity).
+struct pfvi_output_check {
+    double a_seen[3];
+    double radius;
+};
+
 /* ------------------------------------------- geometry (time scales) */
 
 // What the time scales see of REBOUND's gravity: G (0 without gravity), the
@@ -1207,6 +1217,9 @@ struct pfvi_state {
     double output_t_real;
     int output_stages;             // the options the shown output was made with
     double output_epsilon;
+    struct pfvi_output_check* output_check;   // (output_N of them)
+    double output_exit_min_distance;   // REBOUND's contact settings the output was shown with
+    int output_collision;
     double output_last_t0;         // the last real step went from output_last_t0 to output_last_t1
     double output_last_t1;
     int output_uncapped;           // set by the glue: the symmetric control takes the whole interval
@@ -1468,6 +1481,14 @@ PFVI_INTERNAL int pfvi_output_eligible(const struct reb_simulation* r, const str
 PFVI_INTERNAL int pfvi_output_is_shown(const struct reb_simulation* r, const struct pfvi_state* st);
 // Puts the run's own state (output_real, output_t_real) into the simulation.
 PFVI_INTERNAL void pfvi_output_take_up(struct reb_simulation* r, struct pfvi_state* st);
+// Whether the forces still are those the run's step past the shown output
+// was made with: where they include what pfvi cannot see into (a callback's
+// own variables, REBOUNDx's forces and parameters, custom gravity), one
+// evaluation at the run's state, compared bit for bit with the force its
+// step ended with. 1: they are (or nothing hidden), 0: not, -1: the
+// evaluation was refused (st->fault says why). The shown output is back in
+// the simulation either way.
+PFVI_INTERNAL int pfvi_output_forces_hold(struct reb_simulation* r, struct pfvi_state* st);
 // Puts the shown output back (a step refused after pfvi_output_take_up).
 PFVI_INTERNAL void pfvi_output_show_again(struct reb_simulation* r, struct pfvi_state* st);
 // From the run's state at r->t (the end of the last step, its forces in

@@ -243,8 +243,12 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "call (a sim.steps() right after a new simulation's first integrate() takes REBOUND's 0.001 "
       "there for a cap). "
       "An edit makes the shown state the user's, "
-      "as after any edit. Changes pfvi cannot see (a callback's own variables, REBOUNDx parameters) "
-      "made between outputs act from the run's next step, which may start past the output. MEGNO's "
+      "as after any edit. Forces beyond the fields (additional_forces, REBOUNDx's forces and their "
+      "parameters, custom gravity) are evaluated once more at the run's state when a call takes it up "
+      "(with velocity-dependent forces also when the output is shown): if they changed between the "
+      "calls (a callback's own variables, a REBOUNDx force added, removed or given a new parameter), "
+      "the output is taken as edited and the run goes on from it. A contact search set between the "
+      "calls (exit_min_distance, collisions, a radius) does the same. MEGNO's "
       "Y is the output's; <Y> and the Lyapunov exponent are sampled at the run's steps. "
       "Hooks an output step cannot keep consistent with the state it shows fall back to steps cut "
       "at the requested times, as REBOUND's other integrators do: with ODEs (sim.create_ode, "
@@ -335,6 +339,10 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         offsetof(struct pfvi_state, output_var_N), sizeof(struct pfvi_output_particle), 0 },
     { "", REB_POINTER, "output_var_shown", offsetof(struct pfvi_state, output_var_shown),
         offsetof(struct pfvi_state, output_var_N), sizeof(struct pfvi_output_particle), 0 },
+    { "", REB_POINTER, "output_check", offsetof(struct pfvi_state, output_check),
+        offsetof(struct pfvi_state, output_N), sizeof(struct pfvi_output_check), 0 },
+    { "", REB_DOUBLE, "output_exit_min_distance", offsetof(struct pfvi_state, output_exit_min_distance), 0, 0, 0 },
+    { "", REB_INT, "output_collision", offsetof(struct pfvi_state, output_collision), 0, 0, 0 },
     { "", REB_DOUBLE, "output_megno_Ys", offsetof(struct pfvi_state, output_megno[0][0]), 0, 0, 0 },
     { "", REB_DOUBLE, "output_megno_Yss", offsetof(struct pfvi_state, output_megno[0][1]), 0, 0, 0 },
     { "", REB_DOUBLE, "output_megno_Ys_shown", offsetof(struct pfvi_state, output_megno[1][0]), 0, 0, 0 },
@@ -1032,6 +1040,16 @@ static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st
     // (REBOUND flips its sign for a run backwards: a reversal, not a new dt.)
     // (Asked only where an output is held: mid-run, nothing is.)
     c->shown = c->eligible && st->output_N != 0 && !user_set_dt(r, st, c) && pfvi_output_is_shown(r, st);
+    // Forces pfvi cannot see into may have changed since (a callback's own
+    // variables, a REBOUNDx force added, removed or given a new parameter):
+    // the run's step past the output was made with the old ones. Changed,
+    // the output is taken as edited, and the run goes on from it.
+    const int hold = c->shown ? pfvi_output_forces_hold(r, st) : 1;
+    if (hold < 0){
+        pfvi_report(r, st);
+        return PFVI_GLUE_DONE;   // (the output still shown, as it was)
+    }
+    c->shown = c->shown && hold;
     // (Compared only where an output may be shown from the last step's end.
     // A simulation loaded from an archive or copied keeps no end state: it
     // is at the last step's end if t is where that step ended, as REBOUND

@@ -122,6 +122,17 @@ int pfvi_output_is_shown(const struct reb_simulation* r, const struct pfvi_state
     if (!output_same(r->particles, st->output_shown, N)){
         return 0;
     }
+    // A contact search set since (a radius, exit_min_distance, collisions
+    // on): the run's step past the output was not searched for it.
+    if (memcmp(&r->exit_min_distance, &st->output_exit_min_distance, sizeof(double)) != 0
+            || (int)r->collision != st->output_collision){
+        return 0;
+    }
+    for (size_t i=0; i<N; i++){
+        if (memcmp(&r->particles[i].r, &st->output_check[i].radius, sizeof(double)) != 0){
+            return 0;
+        }
+    }
     for (size_t k=0; k<r->N_var_config; k++){
         double c;
         if (!output_var_scale(r, st, k, &c)){
@@ -183,6 +194,35 @@ void pfvi_output_take_up(struct reb_simulation* r, struct pfvi_state* st){
     st->output_taken_up = !r->force_is_velocity_dependent && !r->heartbeat;
 }
 
+// Forces beyond what the force model's fields say (pfvi_force_model).
+static int output_forces_hidden(const struct reb_simulation* r){
+    return r->additional_forces != NULL || r->gravity == REB_GRAVITY_CUSTOM;
+}
+
+int pfvi_output_forces_hold(struct reb_simulation* r, struct pfvi_state* st){
+    if (!output_forces_hidden(r)){
+        return 1;
+    }
+    const size_t N = st->output_N;
+    const double t_shown = r->t;
+    // (A refused evaluation rolls back to st->start: the shown state.)
+    memcpy(st->start, r->particles, N*sizeof(struct reb_particle));
+    output_put(r->particles, st->output_real, N);
+    r->t = st->output_t_real;
+    if (!pfvi_update_acceleration(r, st, N, t_shown)){
+        return -1;
+    }
+    const struct reb_particle* const ps = r->particles;
+    const int seen = r->force_is_velocity_dependent;
+    int same = 1;
+    for (size_t i=0; i<N; i++){
+        const double a[3] = {ps[i].ax, ps[i].ay, ps[i].az};
+        same &= (memcmp(a, seen ? st->output_check[i].a_seen : st->output_real[i].a, sizeof(a)) == 0);
+    }
+    pfvi_output_show_again(r, st);
+    return same;
+}
+
 void pfvi_output_show_again(struct reb_simulation* r, struct pfvi_state* st){
     output_put(r->particles, st->output_shown, st->output_N);
     output_put(r->particles_var, st->output_var_shown, st->output_var_N);
@@ -211,6 +251,22 @@ enum pfvi_trial pfvi_output_present(struct reb_simulation* r, struct pfvi_state*
             memcpy(st->output_var_real[v].a, st->var_end[v].a, sizeof(st->var_end[v].a));
         }
     }
+    if (output_forces_hidden(r) && r->force_is_velocity_dependent){
+        // What pfvi_output_forces_hold compares with at the next call: the
+        // forces at the run's state now (then everything is put back).
+        if (!pfvi_update_acceleration(r, st, N, t_real)){
+            return PFVI_TRIAL_ERROR;   // rolled back to the run's state
+        }
+        for (size_t i=0; i<N; i++){
+            const struct reb_particle* const p = &r->particles[i];
+            st->output_check[i].a_seen[0] = p->ax; st->output_check[i].a_seen[1] = p->ay;
+            st->output_check[i].a_seen[2] = p->az;
+        }
+        memcpy(r->particles, st->start, N*sizeof(struct reb_particle));
+        if (n){
+            memcpy(r->particles_var, st->var_start, n*sizeof(struct reb_particle));
+        }
+    }
     const uint64_t attempts = st->statistics.n_attempts;
     // The state is at t_real + t_lo (pfvi_control.c keeps t's rounding):
     // the output step goes what is left to t_out.
@@ -223,6 +279,11 @@ enum pfvi_trial pfvi_output_present(struct reb_simulation* r, struct pfvi_state*
     }
     output_keep(r->particles, st->output_shown, N);
     output_keep(r->particles_var, st->output_var_shown, n);
+    for (size_t i=0; i<N; i++){
+        st->output_check[i].radius = r->particles[i].r;
+    }
+    st->output_exit_min_distance = r->exit_min_distance;
+    st->output_collision = (int)r->collision;
     if (n && r->calculate_megno){
         // MEGNO's sums at the shown time: the run's, and the output step's
         // share, its integral by parts over its stages (as a step adds it;

@@ -70,6 +70,7 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->var_dv);
     free(st->output_real);
     free(st->output_shown);
+    free(st->output_check);
     free(st->output_var_real);
     free(st->output_var_shown);
     free(st);
@@ -144,6 +145,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->solve_scale = pfvi_grow(st->solve_scale, N*sizeof(*st->solve_scale), &ok);
     st->output_real = pfvi_grow(st->output_real, N*sizeof(*st->output_real), &ok);
     st->output_shown = pfvi_grow(st->output_shown, N*sizeof(*st->output_shown), &ok);
+    st->output_check = pfvi_grow(st->output_check, N*sizeof(*st->output_check), &ok);
     if (st->output_N > N){
         st->output_N = 0;  // as the predictor's, after an archive with fewer particles
     }
