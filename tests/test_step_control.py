@@ -323,3 +323,37 @@ def test_lambda_falls_back_to_exactly_one_and_the_track_goes_on():
         lowest = min(lowest, sim.integrator.density_scale)
     assert sim.integrator.n_rejected > 0  # the scale was raised, so it had to come down
     assert lowest == 1.0
+
+
+def test_a_step_kept_unresolved_is_said_once():
+    # A drag read from the velocities without force_is_velocity_dependent:
+    # the stages see forces that do not follow from the positions, no
+    # retake resolves them, and the steps are kept (n_unresolved). It used to
+    # be silent (40 times IAS15's error at the default epsilon): REBOUND is
+    # now told once per simulation.
+    import warnings
+
+    def run(flag):
+        sim = rebound.Simulation()
+        sim.add(m=1.0)
+        sim.add(m=1e-3, a=1.0, e=0.3)
+        sim.move_to_com()
+
+        def drag(simp):
+            p = simp.contents.particles[1]
+            p.ax -= 0.05*p.vx
+            p.ay -= 0.05*p.vy
+
+        sim.additional_forces = drag
+        sim.force_is_velocity_dependent = flag
+        sim.integrator = "pfvi"
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            sim.integrate(10.0)
+        return sim, [str(w.message) for w in caught if "kept unresolved" in str(w.message)]
+
+    sim, said = run(0)
+    assert sim.integrator.n_unresolved > 1 and len(said) == 1
+    assert "force_is_velocity_dependent" in said[0]
+    sim, said = run(1)
+    assert sim.integrator.n_unresolved == 0 and said == []

@@ -998,6 +998,8 @@ struct pfvi_state {
     // A fixed step's stages implied an error above PFVI_FIXED_WARN and
     // REBOUND was told (once per simulation; not saved).
     int fixed_warned;
+    // A step was kept unresolved and REBOUND was told (once per simulation; not saved).
+    int unresolved_warned;
 
     // Scratch
     size_t N_allocated;

@@ -17,6 +17,7 @@
  * that REBOUND's exact_finish_time can shorten it as it does for IAS15.
  */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 #include "pfvi.h"
 
@@ -878,6 +879,17 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     if (unresolved){
         // Shorter steps did not help: the density was right, keep its scale.
         st->statistics.n_unresolved++;
+        if (!st->unresolved_warned){
+            // Kept silently, such steps made a velocity-dependent force
+            // without its flag 40 times IAS15's error (a hostile trial).
+            st->unresolved_warned = 1;
+            char msg[REB_STRING_SIZE_MAX];
+            // (REBOUND keeps 254 characters of a message.)
+            snprintf(msg, sizeof(msg), "pfvi: step at t = %.6g kept unresolved after " PFVI_STR(PFVI_RESOLUTION_RETRIES)
+                    " retakes (n_unresolved): epsilon not met there. Forces that jump within a step, or depend on "
+                    "velocities without sim.force_is_velocity_dependent = 1, do this. Said once.", t0);
+            reb_simulation_warning(r, msg);
+        }
         t.rho *= lambda0/lambda;
         t.length = kappa/t.rho;
         t.remaining = t.length;
