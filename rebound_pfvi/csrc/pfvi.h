@@ -908,6 +908,14 @@ struct pfvi_replay {
 // units, 5100 steps to t = 410 at epsilon 1e-7, lost its oldest pins and
 // came back 1.5e-4 off on 11 of 30 round trips; none now, 4.1e-10).
 #define PFVI_REPLAY_MAX 1024
+// With hooks that need REBOUND's own outputs, a track restarted by an edit
+// takes the run's own proposal as its first interval where it is at least
+// this fraction of the interval the edited state gives (pfvi_control.c).
+// Below it the proposal is the rest of an interval cut at an output, and
+// the steps would shrink from proposal to proposal (0.9 and 0.5 measured:
+// a mass edited every step beside a retrograde comet, 149 and 91 steps at
+// epsilon 1e-6, 105 unedited; no bound: 383 steps for 208 with 40 outputs).
+#define PFVI_EDIT_TRACK_NEAR 0.5
 // A reversal meets a logged step where its t is within this fraction of the
 // step's length of the step's end; the replayed step lands on the logged
 // start. The way back's grid drifts from the way out's: the rounding of the
@@ -961,6 +969,7 @@ struct pfvi_state {
     double track_kappa;
     double density_scale;
     double dt_last_full;
+    int track_edited;       // the track was dropped for an edit of the particles (until the next step is taken)
     double track_mismatch;  // the average mismatch of rho and lambda sigma (PFVI_TRACK_MISMATCH_WEIGHT)
     double track_seen_lo;   // the time the average has seen: intervals a reversal retraces
     double track_seen_hi;   // within it are not averaged again (pfvi_control.c)
@@ -1120,6 +1129,13 @@ struct pfvi_state {
     size_t cache_N;                // >0: `end` describes the particles, taken at cache_t under cache_model
     size_t end_N;                  // >0: `end` holds the particles as the last step left them (edits are
                                    // found against it; REBOUND's synchronize clears cache_N, not this)
+    // end_N as archives keep it (end_N itself is not saved: a loaded
+    // simulation reuses nothing of its last step). It lets the first step
+    // after a load or copy see a particle edited after the snapshot's step
+    // (a post-timestep hook, a heartbeat), as the run itself does
+    // (pfvi_forget_edited): a copy of a run with mass loss in such a hook
+    // ended 2e-6 off it.
+    size_t end_saved_N;
     double cache_t;
     struct pfvi_force_model cache_model;
     // Particles added or removed by a callback during a step (a force

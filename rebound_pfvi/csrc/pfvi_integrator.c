@@ -296,6 +296,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       REB_INT, "step_control", offsetof(struct pfvi_state, settings.step_control), 0, 0, pfvi_step_control_enum },
     { "", REB_POINTER, "compensation", offsetof(struct pfvi_state, compensation),
         offsetof(struct pfvi_state, N_compensation), sizeof(struct pfvi_compensation), 0 },
+    { "", REB_POINTER, "end_state", offsetof(struct pfvi_state, end),
+        offsetof(struct pfvi_state, end_saved_N), sizeof(struct pfvi_end_state), 0 },
     { "", REB_POINTER, "stage_accelerations", offsetof(struct pfvi_state, predictor_a),
         offsetof(struct pfvi_state, predictor_N), sizeof(*((struct pfvi_state*)0)->predictor_a), 0 },
     { "", REB_POINTER, "stage_positions", offsetof(struct pfvi_state, predictor_x),

@@ -103,6 +103,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
         st->density_scale = 1.;
         st->density_N = 0;
         st->end_N = 0;
+        st->end_saved_N = 0;
         st->output_N = 0;  // a shown output described the old particles
     }
     if (N <= st->N_allocated){
@@ -390,6 +391,7 @@ void pfvi_keep_end(const struct reb_simulation* r, struct pfvi_state* st, size_t
     st->cache_t = r->t;
     force_model_keep(r, &st->cache_model);
     st->end_N = N;
+    st->end_saved_N = N;
 }
 
 void pfvi_keep_end_model(const struct reb_simulation* r, struct pfvi_state* st, size_t N){
@@ -397,6 +399,7 @@ void pfvi_keep_end_model(const struct reb_simulation* r, struct pfvi_state* st, 
     st->cache_t = r->t;
     force_model_keep(r, &st->cache_model);
     st->end_N = N;
+    st->end_saved_N = N;
 }
 
 // A particle the user edited (or replaced) since the last step keeps nothing
@@ -404,7 +407,7 @@ void pfvi_keep_end_model(const struct reb_simulation* r, struct pfvi_state* st, 
 // dropped, so that continuing equals starting afresh from the edited state.
 void pfvi_forget_edited(const struct reb_simulation* r, struct pfvi_state* st){
     const size_t N = r->N;
-    if (st->end_N != N || st->N_compensation != N){
+    if ((st->end_N != N && st->end_saved_N != N) || st->N_compensation != N){
         return;  // N changed (compensation already cleared) or no step to compare with
     }
     const struct reb_particle* const ps = r->particles;
@@ -419,6 +422,7 @@ void pfvi_forget_edited(const struct reb_simulation* r, struct pfvi_state* st){
     if (edited){
         st->predictor_stages = 0;
         st->rho = 0.;  // the symmetric step's density no longer describes them
+        st->track_edited = 1;
         st->density_scale = 1.;
         st->density_N = 0;
         pfvi_replay_clear(st);  // nor does the way so far
