@@ -221,3 +221,26 @@ def test_archive_restarts_of_a_run_edited_every_step_end_on_its_bits(tmp_path):
         assert [(p.x, p.y, p.z, p.vx, p.vy, p.vz) for p in snapshot.particles] == end
         restarts += 1
     assert restarts >= 10
+
+
+@needs_python_heartbeat
+def test_a_heartbeat_that_edits_every_step_never_sees_a_time_past_the_output():
+    # The edited run's restarted track first takes the run's own proposal:
+    # REBOUND decided from it whether a step finishes on the requested time.
+    # (A first try let that track's longer interval run: 20 of 122
+    # heartbeats saw t past the output and then a step back; a hostile trial.)
+    sim = _edited_every_step(None)
+    seen = []
+
+    def lose(simp):
+        s = simp.contents
+        seen.append((requested[0], s.t, s.dt_last_done))
+        s.particles[2].m *= 1.0 - 1e-7*abs(s.dt_last_done)
+
+    requested = [0.0]
+    sim.heartbeat = lose
+    for k in range(1, 31):
+        requested[0] = float(k)
+        sim.integrate(requested[0])
+    past = [(r, t, d) for r, t, d in seen if t > r or d < 0.0]
+    assert len(seen) > 100 and past == []

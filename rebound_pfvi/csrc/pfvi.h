@@ -908,9 +908,9 @@ struct pfvi_replay {
 // units, 5100 steps to t = 410 at epsilon 1e-7, lost its oldest pins and
 // came back 1.5e-4 off on 11 of 30 round trips; none now, 4.1e-10).
 #define PFVI_REPLAY_MAX 1024
-// With hooks that need REBOUND's own outputs, a track restarted by an edit
-// takes the run's own proposal as its first interval where it is at least
-// this fraction of the interval the edited state gives (pfvi_control.c).
+// A track restarted by an edit takes the run's own proposal as its first
+// interval where it is at least this fraction of the interval the edited
+// state gives (pfvi_control.c).
 // Below it the proposal is the rest of an interval cut at an output, and
 // the steps would shrink from proposal to proposal (0.9 and 0.5 measured:
 // a mass edited every step beside a retrograde comet, 149 and 91 steps at
@@ -1235,7 +1235,8 @@ struct pfvi_state {
     double output_t_real;
     int output_stages;             // the options the shown output was made with
     double output_epsilon;
-    struct pfvi_output_check* output_check;   // (output_N of them)
+    struct pfvi_output_check* output_check;   // (output_check_N of them: 0 from an archive without them)
+    size_t output_check_N;
     double output_exit_min_distance;   // REBOUND's contact settings the output was shown with
     int output_collision;
     double output_last_t0;         // the last real step went from output_last_t0 to output_last_t1

@@ -696,22 +696,19 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     // run did not propose caps: REBOUND finishes on a time by checking
     // t + sim.dt against it.)
     // A track restarted by an edit (a post-timestep hook or a heartbeat that
-    // changes a mass every step) from the run's own proposal: capped by it,
-    // its first interval, a little longer, left the rest, a sliver, as the
-    // next step (112 steps for the unedited run's 57: a hostile trial).
-    // Where outputs are shown from the run, the proposal does not cap (as on
-    // the track); where REBOUND's outputs need it (hooks: REBOUND decided
-    // from it whether this step finishes on an output), the proposal
-    // becomes the new track's first interval, unless it is far shorter
-    // (PFVI_EDIT_TRACK_NEAR: the rest of an interval cut at an output).
+    // changes a mass every step) starts with the run's own proposal as its
+    // first interval where that is a little shorter: REBOUND decided from it
+    // whether this step finishes on a requested time, so it caps (uncapped,
+    // steps passed the time and came back: a hostile trial); taken as a cap
+    // of the longer interval, it left the rest, a sliver, as the next step
+    // (112 steps for the unedited run's 57). Far shorter
+    // (PFVI_EDIT_TRACK_NEAR), it is the rest of an interval cut at an output.
     const int own_proposal = st->dt_proposed != 0. && dt == fabs(st->dt_proposed);
-    const int edited_own = st->track_edited && own_proposal;
     const int uncapped = !st->output_cut
         && ((symmetric_on_track(st, kappa) && (own_proposal || dt == fabs(st->dt_last_full)))
-            || (edited_own && pfvi_output_hooks_kept(r))
             || (st->dt_proposed == 0. && (dt == PFVI_REBOUND_DT_DEFAULT || output)));
     const double cap = uncapped ? INFINITY : dt;
-    if (edited_own && cap < t.remaining && cap >= PFVI_EDIT_TRACK_NEAR*t.remaining){
+    if (st->track_edited && own_proposal && cap < t.remaining && cap >= PFVI_EDIT_TRACK_NEAR*t.remaining){
         t.rho = kappa/cap;
         t.length = t.remaining = cap;
     }

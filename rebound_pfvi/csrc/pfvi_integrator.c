@@ -342,7 +342,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_POINTER, "output_var_shown", offsetof(struct pfvi_state, output_var_shown),
         offsetof(struct pfvi_state, output_var_N), sizeof(struct pfvi_output_particle), 0 },
     { "", REB_POINTER, "output_check", offsetof(struct pfvi_state, output_check),
-        offsetof(struct pfvi_state, output_N), sizeof(struct pfvi_output_check), 0 },
+        offsetof(struct pfvi_state, output_check_N), sizeof(struct pfvi_output_check), 0 },
     { "", REB_DOUBLE, "output_exit_min_distance", offsetof(struct pfvi_state, output_exit_min_distance), 0, 0, 0 },
     { "", REB_INT, "output_collision", offsetof(struct pfvi_state, output_collision), 0, 0, 0 },
     { "", REB_DOUBLE, "output_megno_Ys", offsetof(struct pfvi_state, output_megno[0][0]), 0, 0, 0 },

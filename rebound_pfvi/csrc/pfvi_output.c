@@ -123,8 +123,10 @@ int pfvi_output_is_shown(const struct reb_simulation* r, const struct pfvi_state
         return 0;
     }
     // A contact search set since (a radius, exit_min_distance, collisions
-    // on): the run's step past the output was not searched for it.
-    if (memcmp(&r->exit_min_distance, &st->output_exit_min_distance, sizeof(double)) != 0
+    // on): the run's step past the output was not searched for it. (An
+    // archive written before these were kept has none: taken as edited.)
+    if (st->output_check_N != N
+            || memcmp(&r->exit_min_distance, &st->output_exit_min_distance, sizeof(double)) != 0
             || (int)r->collision != st->output_collision){
         return 0;
     }
@@ -282,6 +284,7 @@ enum pfvi_trial pfvi_output_present(struct reb_simulation* r, struct pfvi_state*
     for (size_t i=0; i<N; i++){
         st->output_check[i].radius = r->particles[i].r;
     }
+    st->output_check_N = N;
     st->output_exit_min_distance = r->exit_min_distance;
     st->output_collision = (int)r->collision;
     if (n && r->calculate_megno){
