@@ -49,10 +49,12 @@ def test_the_default_line_and_the_fastest_other_line_are_always_candidates():
 def test_a_candidate_is_dropped_when_its_run_here_misses_the_target():
     scene = scenes.make("kepler", e=0.5, periods=2.0)
     reference = scene.reference()
-    loose = cells_interleaved.Candidate(row("pfvi s=8", "pfvi", 1e-3, 1e-3, 1e-12))  # the page's error is a lie
+    # (The target is far above the exact reference's own error before
+    # rebound 5.2, up to 5e-9 AU: README.md.)
+    loose = cells_interleaved.Candidate(row("pfvi s=2", "pfvi", 1e-3, 1e-3, 1e-12, {"stages": 2}))  # the page lies
     tight = cells_interleaved.Candidate(row("pfvi s=8", "pfvi", 1e-12, 1e-3, 1e-12))
     cands = [loose, tight]
-    dropped = cells_interleaved.measure(scene, reference, cands, 1e-9, rounds=1, sample=0.0)
+    dropped = cells_interleaved.measure(scene, reference, cands, 1e-6, rounds=1, sample=0.0)
     assert cands == [tight] and len(dropped) == 1 and "epsilon 0.001" in dropped[0]
-    assert loose.error > 1e-9 >= tight.error
+    assert loose.error > 1e-6 >= tight.error
     assert 0.0 < tight.best < 1.0
