@@ -585,8 +585,8 @@ def test_an_unchanged_force_keeps_the_run_independent_of_its_outputs(velocity_de
 
 
 def _approach():
-    # Two planets whose closest approach is 0.2852 at t = 5.24; IAS15's
-    # contact (and pfvi's with the search on from the start) at 5.215.
+    # Two planets on circular orbits 0.3 apart: their separation first
+    # falls below the tests' 0.29 at t = 3.577 (the search on from the start).
     sim = rebound.Simulation()
     sim.add(m=1.0)
     sim.add(m=1e-3, a=1.0, e=0.0)
