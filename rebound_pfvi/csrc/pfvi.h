@@ -1317,6 +1317,10 @@ PFVI_INTERNAL void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* s
 // Evaluates forces through REBOUND; 0 (rolled back, fault recorded) if they
 // are not finite or a callback changed N.
 PFVI_INTERNAL int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0);
+// Whether the forces run user code (additional_forces, REBOUNDx, custom
+// gravity): code that may edit particles during an evaluation, and whose
+// forces no field of REBOUND's describes.
+PFVI_INTERNAL int pfvi_forces_run_user_code(const struct reb_simulation* r);
 // pfvi_gravity.c: whether REBOUND's routine would compute only its basic
 // gravity (no additional forces, variations, ghost boxes or ignored terms),
 // which pfvi_gravity_stages then computes at stages k0 .. k1 of positions x

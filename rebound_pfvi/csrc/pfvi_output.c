@@ -196,13 +196,8 @@ void pfvi_output_take_up(struct reb_simulation* r, struct pfvi_state* st){
     st->output_taken_up = !r->force_is_velocity_dependent && !r->heartbeat;
 }
 
-// Forces beyond what the force model's fields say (pfvi_force_model).
-static int output_forces_hidden(const struct reb_simulation* r){
-    return r->additional_forces != NULL || r->gravity == REB_GRAVITY_CUSTOM;
-}
-
 int pfvi_output_forces_hold(struct reb_simulation* r, struct pfvi_state* st){
-    if (!output_forces_hidden(r)){
+    if (!pfvi_forces_run_user_code(r)){
         return 1;
     }
     const size_t N = st->output_N;
@@ -253,7 +248,7 @@ enum pfvi_trial pfvi_output_present(struct reb_simulation* r, struct pfvi_state*
             memcpy(st->output_var_real[v].a, st->var_end[v].a, sizeof(st->var_end[v].a));
         }
     }
-    if (output_forces_hidden(r) && r->force_is_velocity_dependent){
+    if (pfvi_forces_run_user_code(r) && r->force_is_velocity_dependent){
         // What pfvi_output_forces_hold compares with at the next call: the
         // forces at the run's state now (then everything is put back).
         if (!pfvi_update_acceleration(r, st, N, t_real)){

@@ -718,10 +718,14 @@ static int rebound_errors(const struct reb_simulation* r){
     return n;
 }
 
+int pfvi_forces_run_user_code(const struct reb_simulation* r){
+    return r->additional_forces != NULL || r->gravity == REB_GRAVITY_CUSTOM;
+}
+
 int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
     // Only user code (a force callback, custom gravity) can edit particles
     // during an evaluation; REBOUND's own gravity does not.
-    const int guarded = r->additional_forces != NULL || r->gravity == REB_GRAVITY_CUSTOM;
+    const int guarded = pfvi_forces_run_user_code(r);
     const double t = r->t;
     if (guarded){
         written_keep(r, st, N);
