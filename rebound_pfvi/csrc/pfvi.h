@@ -266,6 +266,18 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 #define PFVI_WEAK_PULL_MARGIN 10.
 #define PFVI_RESOLUTION_RETRIES 5
 #define PFVI_RESOLUTION_SLACK 2.0
+// Without pairs (no density to track: pfvi_control.c, control_unpaired)
+// each step's resolution u is aimed at AIM kappa (a circular orbit's steps
+// under the density have u = kappa), proposed SAFETY times below that, and
+// a step above RETAKE times the aim is retaken. Measured on test particles
+// in a Kepler potential from additional_forces (e = 0 ... 0.99, epsilon
+// 1e-6 ... 1e-10; tests/test_unpaired.py): AIM 1 took 1.3-2.5 times the
+// steps of the same orbits about a massive body, for errors 1e3 times
+// smaller; 1.4 with RETAKE 1.25 ends within the paired runs' errors; 1.8
+// left e = 0.99 from pericentre 5e-7 off at epsilon 1e-7 and 1e-8 alike.
+#define PFVI_UNPAIRED_AIM 1.4
+#define PFVI_UNPAIRED_SAFETY 0.9
+#define PFVI_UNPAIRED_RETAKE 1.25
 // Fixed steps (epsilon = 0) are checked as the symmetric steps are: the
 // error per orbit their stages imply (pfvi_resolution_error; for a fitted
 // step from the residual its fitted path does not carry). Above FIXED_WARN

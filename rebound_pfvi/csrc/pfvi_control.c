@@ -609,6 +609,78 @@ static void replay_remove(struct pfvi_state* st, size_t k){
     st->replay_n--;
 }
 
+// Without pairs (gravity off, or no massive body: test particles in a
+// potential given by additional_forces) there is no density to track. Each
+// step is then sized by its own stages: their resolution u (h times the
+// rate their forces vary at, the resolution check's measure) is aimed at
+// PFVI_UNPAIRED_AIM of the Kepler worst u_target, as an explicit method's
+// embedded estimate steers it; not time-symmetric (n_asymmetric). A step
+// the resolution check would retake is retaken at the step that resolves
+// it, one whose solve does not converge at half (each counted in
+// n_rejected). Forces that do not vary over a step (free motion, a uniform
+// field: u = 0) leave the step as it was, sim.dt at the start. Before, the
+// steps were sim.dt whatever epsilon asked: a test particle of e = 0.9 in a
+// Kepler potential from additional_forces ended 140 off IAS15 at sim.dt = 1
+// with no warning (a hostile trial).
+static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
+        double sign, const struct pfvi_symmetric_constants* constants){
+    const int s = st->options.stages;
+    const double u_aim = PFVI_UNPAIRED_AIM*constants->kappa;
+    double h = fabs(r->dt), u = 0.;
+    int retakes = 0, unresolved = 0;
+    struct pfvi_field field;
+    for (;;){
+        const enum pfvi_trial trial = pfvi_trial_step(r, st, N, t0, sign*h);
+        if (trial == PFVI_TRIAL_ERROR){
+            return 0.;
+        }
+        double h_next = 0.5*h;
+        if (trial == PFVI_TRIAL_OK){
+            if (!pfvi_field_of(r, st, &field)){
+                pfvi_roll_back(r, st, N, t0);
+                return 0.;
+            }
+            u = symmetric_resolution(r, st, N, sign*h, &field, constants->above);
+            const int coarse = u > PFVI_UNPAIRED_RETAKE*u_aim;
+            unresolved = coarse && retakes == PFVI_RESOLUTION_RETRIES;
+            if (!coarse || unresolved){
+                break;
+            }
+            pfvi_roll_back(r, st, N, t0);
+            retakes++;
+            h_next = h*fmax(PFVI_CONTROL_SHRINK_MIN, fmin(0.5, u_aim/u));
+        }else{
+            st->statistics.n_solve_halved++;
+        }
+        st->statistics.n_rejected++;
+        st->statistics.n_asymmetric++;
+        h = h_next;
+        if (t0 + sign*h == t0){
+            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_NOT_CONVERGED, .n = (size_t)s,
+                .value = st->trial.change, .rounds = st->trial.rounds, .t0 = t0};
+            return 0.;
+        }
+    }
+    pfvi_commit_step(r, st, N, sign*h);
+    st->rho = 0.;
+    if (unresolved){
+        st->statistics.n_unresolved++;
+    }
+    {
+        static const double constant[PFVI_STAGES_MAX + 1] = PFVI_SYMMETRIC_CONSTANTS;
+        static const double resolution_constant[PFVI_STAGES_MAX + 1] = PFVI_RESOLUTION_CONSTANTS;
+        st->statistics.error_estimate = constant[s]*pow(u/resolution_constant[s], 2.*s - 2.);
+    }
+    // The next step: towards the aim, with a margin (PFVI_UNPAIRED_SAFETY)
+    // so that a step growing into a faster passage is seldom retaken; at
+    // most PFVI_CONTROL_GROW_MAX times this one, and not grown after retakes.
+    const double aimed = (u > 0.) ? PFVI_UNPAIRED_SAFETY*u_aim/u : 1.;
+    const double factor = fmax(PFVI_CONTROL_SHRINK_MIN, fmin(retakes ? 1. : PFVI_CONTROL_GROW_MAX, aimed));
+    r->dt = sign*h*factor;
+    st->dt_proposed = r->dt;
+    return sign*h;
+}
+
 // The symmetric step (Hairer & Soderlind 2005, SIAM J. Sci. Comput. 26,
 // 1838): the grid of the run has intervals h_n = kappa/rho_n+1/2 with
 //     rho_n+1/2 = rho_n-1/2 + kappa G(y_n),   G = d log(sigma)/dt,
@@ -644,7 +716,7 @@ static void replay_remove(struct pfvi_state* st, size_t k){
 //    the step counted in n_unresolved.
 // Lambda falls back towards 1 where whole intervals resolve the forces
 // PFVI_RESOLUTION_SLACK times finer than needed (n_asymmetric). Without
-// pairs (no gravity, or no massive body) the steps are sim.dt.
+// pairs (no gravity, or no massive body): control_unpaired.
 static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
     static const double resolution_constant[PFVI_STAGES_MAX + 1] = PFVI_RESOLUTION_CONSTANTS;
     const struct pfvi_options* const o = &st->options;
@@ -655,31 +727,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     const double sigma0 = st->density_sigma, g0 = st->density_dlog;
     st->statistics.epsilon_effective = constants->epsilon_effective;
     if (!(sigma0 > 0.)){
-        // Without pairs: steps of sim.dt (halved where the solve does not
-        // converge), no track.
-        double h = sign*fabs(r->dt);
-        for (;;){
-            const enum pfvi_trial trial = pfvi_trial_step(r, st, N, t0, h);
-            if (trial == PFVI_TRIAL_ERROR){
-                return 0.;
-            }
-            if (trial == PFVI_TRIAL_OK){
-                break;
-            }
-            st->statistics.n_rejected++;
-            st->statistics.n_asymmetric++;
-            st->statistics.n_solve_halved++;
-            h *= 0.5;
-            if (t0 + h == t0){
-                st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_NOT_CONVERGED, .n = (size_t)o->stages,
-                    .value = st->trial.change, .rounds = st->trial.rounds, .t0 = t0};
-                return 0.;
-            }
-        }
-        pfvi_commit_step(r, st, N, h);
-        st->rho = 0.;
-        st->statistics.error_estimate = 0.;
-        return h;
+        return control_unpaired(r, st, N, t0, sign, constants);
     }
     symmetric_discard_implausible(st, sigma0);
     if (!symmetric_on_track(st, kappa)){

@@ -1,0 +1,129 @@
+"""Steps without pairs: test particles in a potential given by additional_forces
+(no massive body), or gravity off. There is no density to track, so each step
+is sized from its own stages' resolution (pfvi_control.c, control_unpaired).
+The build before took sim.dt whatever epsilon asked: a test particle of
+e = 0.9 in a Kepler potential ended 140 off IAS15 at sim.dt = 1, silently."""
+import math
+
+import pytest
+import rebound
+
+KEPT = []
+
+
+def kepler_potential(simp):
+    for p in simp.contents.particles:
+        r = math.sqrt(p.x * p.x + p.y * p.y + p.z * p.z)
+        f = -1.0 / r**3
+        p.ax += f * p.x
+        p.ay += f * p.y
+        p.az += f * p.z
+
+
+def in_potential(integrator, e, f=0.0, inc=0.0, epsilon=None, dt=None, gravity=None):
+    """Two test particles about a unit mass at the origin, the mass given as a
+    potential (the star removed): its orbits are Kepler's."""
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=0.0, a=1.0, e=e, f=f, inc=inc)
+    sim.add(m=0.0, a=3.0, e=0.5, omega=1.0, inc=2.5)   # retrograde
+    sim.remove(0)
+    if gravity:
+        sim.gravity = gravity
+    sim.additional_forces = kepler_potential
+    sim.integrator = integrator
+    if integrator == "ias15":
+        sim.integrator.epsilon = 1e-11
+    elif epsilon is not None:
+        sim.integrator.epsilon = epsilon
+    if dt is not None:
+        sim.dt = dt
+    return sim
+
+
+def off(sim, ref):
+    return max(math.dist((p.x, p.y, p.z), (q.x, q.y, q.z)) for p, q in zip(sim.particles, ref.particles))
+
+
+T = 20 * math.pi   # 10 orbits of the inner particle
+
+
+@pytest.mark.parametrize("e", [0.0, 0.5, 0.9, 0.99])
+@pytest.mark.parametrize("f", [0.0, 2.0])
+def test_epsilon_is_met_without_pairs(e, f):
+    ref = in_potential("ias15", e, f)
+    ref.integrate(T)
+    errors = {}
+    for epsilon in (1e-6, 1e-10):
+        for dt in (None, 1.0):
+            sim = in_potential("pfvi", e, f, epsilon=epsilon, dt=dt)
+            sim.integrate(T)
+            errors[epsilon, dt] = off(sim, ref)
+            # Measured at most 3.3e-8 (epsilon 1e-6) and 4.3e-11 (1e-10),
+            # e = 0.99 from pericentre, in 646 and 870 steps (IAS15 at
+            # 1e-11: 3085); the build before: 140 at sim.dt = 1, and 2.4e-10
+            # in 62832 steps at REBOUND's sim.dt of 0.001.
+            assert errors[epsilon, dt] < {1e-6: 3e-7, 1e-10: 1e-9}[epsilon]
+            assert sim.integrator.n_steps < 1200
+            assert sim.integrator.error_estimate > 0.0
+    # Where the steps begin (sim.dt) does not set the answer: both runs
+    # fall with epsilon.
+    assert errors[1e-10, None] < 0.1 * errors[1e-6, None] or errors[1e-6, None] < 1e-11
+    assert errors[1e-10, 1.0] < 0.1 * errors[1e-6, 1.0] or errors[1e-6, 1.0] < 1e-11
+
+
+def test_gravity_off_with_a_potential_is_the_same_run():
+    # gravity = 'none' and no massive body are the same case: no pairs.
+    a = in_potential("pfvi", 0.7)
+    b = in_potential("pfvi", 0.7, gravity="none")
+    a.integrate(5.0)
+    b.integrate(5.0)
+    assert [(p.x, p.vx) for p in a.particles] == [(p.x, p.vx) for p in b.particles]
+    assert a.integrator.n_steps == b.integrator.n_steps
+
+
+def test_free_motion_and_a_uniform_field_keep_the_step():
+    # Forces that do not vary over a step tell nothing of a time scale: the
+    # step stays sim.dt, as before (and the motion is exact).
+    sim = rebound.Simulation()
+    sim.gravity = "none"
+    sim.add(m=0.0, x=1.0, vy=0.5)
+
+    def uniform(simp):
+        simp.contents.particles[0].az -= 0.1
+
+    sim.additional_forces = uniform
+    sim.integrator = "pfvi"
+    sim.dt = 0.25
+    sim.integrate(10.0)
+    assert sim.integrator.n_steps == 40
+    assert abs(sim.particles[0].z - (-0.05 * 100.0)) < 1e-12
+    assert abs(sim.particles[0].y - 5.0) < 1e-12
+
+
+def test_outputs_and_a_way_back():
+    # Outputs cut the steps (REBOUND's own outputs: no density, no dense
+    # output) and the answer stays within epsilon's reach of one call; the
+    # way back returns to the start.
+    one = in_potential("pfvi", 0.9, epsilon=1e-9)
+    one.integrate(T)
+    many = in_potential("pfvi", 0.9, epsilon=1e-9)
+    for k in range(1, 101):
+        many.integrate(T * k / 100)
+    assert abs(many.t - T) <= 1e-12 * T   # REBOUND's own finish (IAS15's too)
+    assert off(many, one) < 1e-9   # measured 9.5e-12
+    start = in_potential("pfvi", 0.9, epsilon=1e-9)
+    many.integrate(0.0)
+    assert off(many, start) < 1e-9   # measured 4.1e-12
+
+
+def test_a_close_pass_of_the_origin_is_resolved():
+    # A nearly radial orbit (e = 0.999) from apocentre: the steps shrink by
+    # orders of magnitude at the pass and grow again, no step is left
+    # unresolved, and the pass ends where IAS15's does.
+    ref = in_potential("ias15", 0.999, f=math.pi)
+    ref.integrate(2 * math.pi)
+    sim = in_potential("pfvi", 0.999, f=math.pi, epsilon=1e-9)
+    sim.integrate(2 * math.pi)
+    assert sim.integrator.n_unresolved == 0
+    assert off(sim, ref) < 1e-9   # measured 2.5e-13 in 119 steps (IAS15: 435)
