@@ -451,9 +451,11 @@ def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int
     issued (``warnings.simplefilter("error", NoRunFinished)`` makes it an
     exception). The command line writes the page and exits with status 1.
     """
-    settings = list(settings if settings is not None else default_settings(scene))
+    given = settings is not None
+    settings = list(settings if given else default_settings(scene))
     if not settings:
-        raise ValueError("settings: the sweep is empty (no integrator family applies to this scene)")
+        raise ValueError("settings: the sweep is empty (an empty list was given)" if given
+                         else "settings: the sweep is empty (no integrator family applies to this scene)")
     # The command line's checks (rebound_pfvi.checks), with the arguments' names.
     repeats, samples = checks.positive_int(repeats, "repeats"), checks.positive_int(samples, "samples")
     workers = None if workers is None else checks.positive_int(workers, "workers")

@@ -76,6 +76,12 @@ def test_the_python_api_makes_the_command_lines_checks(call, message):
     assert str(refused.value) == message or str(refused.value).startswith(message + ";"), str(refused.value)
 
 
+def test_an_empty_list_of_settings_is_named_as_such():
+    # (It said "no integrator family applies to this scene", a hostile trial.)
+    with pytest.raises(ValueError, match="an empty list was given"):
+        compare.run(scenes.make("kepler"), [])
+
+
 def test_a_budget_may_be_a_time_quantity():
     assert kepler_run(budget=2 * u.min).budget == 120.0
     assert units.parse("3 day", "time", "t").to_value(u.day) == 3.0
