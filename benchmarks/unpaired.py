@@ -1,0 +1,128 @@
+"""Runs without pairs (no density to track: gravity off, or no massive body):
+pfvi against IAS15 and BS on test particles in potentials given by
+additional_forces and on a user's own gravity (docs/adaptive.md, "Without
+pairs"). Each run's error is its largest position difference from IAS15 at
+epsilon 1e-11 after 30 time units; CPU time best of --repeats.
+
+    python -P benchmarks/unpaired.py [--repeats 3]
+"""
+import argparse
+import math
+import time
+
+import rebound
+
+import rebound_pfvi  # noqa: F401
+
+T_END = 30.0
+
+
+def kepler_potential(simp):
+    for p in simp.contents.particles:
+        r = math.sqrt(p.x * p.x + p.y * p.y + p.z * p.z)
+        f = -1.0 / r**3
+        p.ax += f * p.x
+        p.ay += f * p.y
+        p.az += f * p.z
+
+
+def own_gravity(simp):
+    ps, n = simp.contents.particles, simp.contents.N
+    for i in range(n):
+        for j in range(i + 1, n):
+            dx, dy, dz = ps[j].x - ps[i].x, ps[j].y - ps[i].y, ps[j].z - ps[i].z
+            r3 = (dx * dx + dy * dy + dz * dz) ** 1.5
+            ps[i].ax += ps[j].m * dx / r3
+            ps[i].ay += ps[j].m * dy / r3
+            ps[i].az += ps[j].m * dz / r3
+            ps[j].ax -= ps[i].m * dx / r3
+            ps[j].ay -= ps[i].m * dy / r3
+            ps[j].az -= ps[i].m * dz / r3
+
+
+def log_halo(simp):
+    for p in simp.contents.particles:
+        R2 = p.x * p.x + p.y * p.y + p.z * p.z / 0.64 + 0.01
+        p.ax -= p.x / R2
+        p.ay -= p.y / R2
+        p.az -= p.z / 0.64 / R2
+
+
+def plummer_drag(simp):
+    for p in simp.contents.particles:
+        r2 = p.x * p.x + p.y * p.y + p.z * p.z + 0.01
+        f = -1.0 / r2**1.5
+        p.ax += f * p.x - 0.01 * p.vx
+        p.ay += f * p.y - 0.01 * p.vy
+        p.az += f * p.z - 0.01 * p.vz
+
+
+def build(scene):
+    sim = rebound.Simulation()
+    if scene == "Kepler potential, e = 0.9":
+        sim.add(m=1.0)
+        sim.add(m=0.0, a=1.0, e=0.9)
+        sim.add(m=0.0, a=3.0, e=0.5, omega=1.0, inc=2.5)
+        sim.remove(0)
+        force = kepler_potential
+    elif scene == "own gravity, gravity off":
+        sim.add(m=1.0)
+        sim.add(m=1e-3, a=1.0, e=0.6)
+        sim.add(m=1e-3, a=1.6, e=0.3, inc=0.4, f=2.0)
+        sim.move_to_com()
+        sim.gravity = "none"
+        force = own_gravity
+    elif scene == "flattened logarithmic halo":
+        sim.add(m=0.0, x=1.0, vy=0.9, vz=0.2)
+        sim.add(m=0.0, x=0.2, vy=0.1, vz=0.05)
+        sim.add(m=0.0, x=-3.0, vy=-0.3)
+        force = log_halo
+    else:
+        sim.add(m=0.0, x=1.0, vy=0.6)
+        sim.add(m=0.0, x=0.05, vy=1.5, vz=0.3)
+        sim.force_is_velocity_dependent = 1
+        force = plummer_drag
+    sim.additional_forces = force
+    return sim, force
+
+
+SCENES = ("Kepler potential, e = 0.9", "own gravity, gravity off", "flattened logarithmic halo",
+          "Plummer sphere with drag")
+RUNS = (("ias15", None), ("pfvi", None), ("pfvi", 1e-10), ("bs", None))
+
+
+def run(scene, integrator, epsilon):
+    sim, force = build(scene)
+    sim.integrator = integrator
+    if epsilon is not None:
+        sim.integrator.epsilon = epsilon
+    start = time.process_time()
+    sim.integrate(T_END)
+    return sim, time.process_time() - start, force
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args(argv)
+    print("| scene | integrator | epsilon | error | steps | CPU time (ms) |")
+    print("|---|---|---|---|---|---|")
+    for scene in SCENES:
+        reference, _, _ = run(scene, "ias15", 1e-11)
+        best = {}
+        for _ in range(args.repeats):
+            for integrator, epsilon in RUNS:
+                sim, seconds, _ = run(scene, integrator, epsilon)
+                key = (integrator, epsilon)
+                if key not in best or seconds < best[key][1]:
+                    best[key] = (sim, seconds)
+        for integrator, epsilon in RUNS:
+            sim, seconds = best[integrator, epsilon]
+            error = max(math.dist((p.x, p.y, p.z), (q.x, q.y, q.z)) for p, q in zip(sim.particles, reference.particles))
+            steps = sim.integrator.n_steps if integrator == "pfvi" else sim.steps_done
+            shown = "default" if epsilon is None else f"{epsilon:g}"
+            print(f"| {scene} | {integrator} | {shown} | {error:.1e} | {steps} | {1e3 * seconds:.0f} |")
+
+
+if __name__ == "__main__":
+    main()
