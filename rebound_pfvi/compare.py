@@ -452,7 +452,7 @@ def run(scene: Scene, settings: Optional[Sequence[Setting]] = None, repeats: int
     exception). The command line writes the page and exits with status 1.
     """
     given = settings is not None
-    settings = list(settings if given else default_settings(scene))
+    settings = list(settings) if settings is not None else list(default_settings(scene))
     if not settings:
         raise ValueError("settings: the sweep is empty (an empty list was given)" if given
                          else "settings: the sweep is empty (no integrator family applies to this scene)")

@@ -63,6 +63,55 @@ def test_a_coarse_fixed_step_warning_gives_the_span_and_a_lower_bound():
         sim.steps(6)
 
 
+def test_fixed_steps_whose_estimate_saturates_warn_by_the_density():
+    # e = 0.9 at sim.dt = 0.1: 5.7 radians at pericentre, where the stages'
+    # estimate saturates (1.1e-3 per orbit). Before, no warning while a fell
+    # by 14% in 10 orbits; steps of 0.03 (3.5 radians) stay silent and right.
+    sim = kepler(0.9)
+    sim.integrator.epsilon = 0.0
+    sim.dt = 0.1
+    with pytest.warns(RuntimeWarning, match=r"fixed step dt = 0\.1 from t = .* spans \d\.\d+ radians of the fastest "
+                                            r"orbit, where steps err by more than 1e-2 per orbit \(above 2\.2\)"):
+        sim.integrate(20 * math.pi)
+    sim = kepler(0.9)
+    sim.integrator.epsilon = 0.0
+    sim.dt = 0.03
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sim.integrate(20 * math.pi)
+    assert abs(sim.particles[1].orbit(primary=sim.particles[0]).a / kepler(0.9).particles[1].orbit(
+        primary=kepler(0.9).particles[0]).a - 1.0) < 1e-6
+
+
+def test_fixed_steps_without_pairs_warn_where_their_stages_saturate():
+    # A test particle in a Kepler potential from additional_forces (no
+    # massive body, so no density to measure the step against): 170 off at
+    # sim.dt = 1 without a word before.
+    def potential(simp):
+        for p in simp.contents.particles:
+            r3 = (p.x * p.x + p.y * p.y + p.z * p.z) ** 1.5
+            p.ax -= p.x / r3
+            p.ay -= p.y / r3
+            p.az -= p.z / r3
+
+    for dt, warns in ((1.0, True), (0.1, True), (0.01, False)):
+        sim = rebound.Simulation()
+        sim.add(m=1.0)
+        sim.add(m=0.0, a=1.0, e=0.9)
+        sim.remove(0)
+        sim.additional_forces = potential
+        sim.integrator = "pfvi"
+        sim.integrator.epsilon = 0.0
+        sim.dt = dt
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            sim.integrate(2 * math.pi)
+        said = [str(w.message) for w in caught if "is not resolved" in str(w.message)]
+        assert bool(said) == warns, (dt, said)
+        if warns:
+            assert "no pair sets a time scale" in said[0] and len(said) == 1
+
+
 def test_point_masses_colliding_are_refused_with_the_cause():
     # Two equal masses falling together head-on: the adaptive step shrinks
     # below t's rounding. The message blamed dt ("use a larger dt").

@@ -292,6 +292,14 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // (measured on Kepler orbits, e = 0 ... 0.9, s = 4 ... 8: every step accepted
 // beyond it ended at least 0.3 of the orbit off within three steps).
 #define PFVI_FIXED_WARN 1e-2
+// Where the stages' estimate saturates (u above FIXED_GATE of its bound) it
+// is no measure: a step of the density's |h| sigma above the kappa at which
+// the symmetric control's steps err by FIXED_WARN per orbit, (FIXED_WARN/
+// C_s)^(1/(2s - 2)), warns too, and without pairs (no density) the
+// saturation itself does. Before, Kepler e = 0.9 at sim.dt = 0.1 (5.7
+// radians at pericentre; the stages said 1.1e-3 per orbit) lost 14% of its
+// semi-major axis in 10 orbits, and a test particle in a Kepler potential
+// from additional_forces ended 170 off at sim.dt = 1, without a word.
 #define PFVI_FIXED_GATE 0.4
 #define PFVI_FIXED_KAPPA_MAX 6.3
 // The track's rho follows lambda sigma to within the lag of its update:
@@ -1490,6 +1498,7 @@ struct pfvi_fixed_check {
     double kappa;           // |h| sigma, or |h| n at a pericentre inside the step if larger; 0 if not computed (PFVI_FIXED_GATE)
     size_t pericentre;      // the body whose pericentre gave kappa, SIZE_MAX if none
     int refuse;
+    int saturated;          // u above PFVI_FIXED_GATE of its bound: the estimate is a lower bound
 };
 // 0 if the step is refused (rolled back, fault recorded: it is longer than
 // PFVI_FIXED_KAPPA_MAX/sigma) or memory ran out; fills out either way.

@@ -207,7 +207,10 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "imply (for a fitted step, from the force its fitted path does not carry, a + omega^2 d). Above "
         PFVI_STR(PFVI_FIXED_WARN) " REBOUND warns, once per simulation, naming the particle, the step and "
         "that error (at s = 2 it runs 5 to 25 times above the error measured on Kepler orbits: 50 steps per "
-        "period warn there, not at s >= 4); a step longer than " PFVI_STR(PFVI_FIXED_KAPPA_MAX) " over the "
+        "period warn there, not at s >= 4). Where that estimate saturates (a step across a pericentre it "
+        "does not resolve) it warns too if the step spans more of the fastest orbit than steps that err by "
+        PFVI_STR(PFVI_FIXED_WARN) " per orbit (s = 8: 2.2 radians), or, without pairs to measure it against, "
+        "at once; a step longer than " PFVI_STR(PFVI_FIXED_KAPPA_MAX) " over the "
         "step density (more than an orbit of the fastest time scale, where the stage solve can converge to "
         "no motion at all: measured 20 to 600 AU off after three steps) is refused, state restored.",
         REB_DOUBLE, epsilon),
@@ -893,15 +896,33 @@ static double pfvi_fixed_step(struct reb_simulation* r, struct pfvi_state* st, s
     if (!pfvi_fixed_step_check(r, st, N, t0, h, &check)){
         return 0.;
     }
-    if (check.error > PFVI_FIXED_WARN && !st->fixed_warned){
+    // (The kappa at which the symmetric control's steps err by FIXED_WARN per orbit.)
+    static const double constant[PFVI_STAGES_MAX + 1] = PFVI_SYMMETRIC_CONSTANTS;
+    const int s = st->options.stages;
+    const double kappa_warn = pow(PFVI_FIXED_WARN/constant[s], 1./(2.*s - 2.));
+    const int by_density = check.saturated && check.kappa > kappa_warn;
+    const int unpaired = check.saturated && !(check.kappa > 0.);
+    if ((check.error > PFVI_FIXED_WARN || by_density || unpaired) && !st->fixed_warned){
         st->fixed_warned = 1;
         char msg[REB_STRING_SIZE_MAX];
         // The stages' estimate saturates (pfvi_fixed_step_check): a lower
         // bound, said so, with the span the density measured.
-        snprintf(msg, sizeof(msg), "pfvi: the fixed step dt = %.6g from t = %.10g spans %.2g radians of the fastest "
-                "orbit; particle %zu's stages imply a position error of at least %.2g per orbit (above "
-                PFVI_STR(PFVI_FIXED_WARN) "). Use a shorter dt or epsilon > 0. Said once per simulation.",
-                h, t0, check.kappa, check.particle, check.error);
+        // (REBOUND keeps 254 characters of a message.)
+        if (check.error > PFVI_FIXED_WARN){
+            snprintf(msg, sizeof(msg), "pfvi: the fixed step dt = %.6g from t = %.10g spans %.2g radians of the "
+                    "fastest orbit; particle %zu's stages imply a position error of at least %.2g per orbit (above "
+                    PFVI_STR(PFVI_FIXED_WARN) "). Use a shorter dt or epsilon > 0. Said once per simulation.",
+                    h, t0, check.kappa, check.particle, check.error);
+        }else if (by_density){
+            snprintf(msg, sizeof(msg), "pfvi: the fixed step dt = %.6g from t = %.10g spans %.2g radians of the "
+                    "fastest orbit, where steps err by more than " PFVI_STR(PFVI_FIXED_WARN) " per orbit (above "
+                    "%.2g). Use a shorter dt or epsilon > 0. Said once per simulation.", h, t0, check.kappa, kappa_warn);
+        }else{
+            snprintf(msg, sizeof(msg), "pfvi: the fixed step dt = %.6g from t = %.10g is not resolved: particle %zu's "
+                    "forces turn by %.2g radians in it, where its stages' estimate saturates, and no pair sets a "
+                    "time scale. Use a shorter dt or epsilon > 0. Said once per simulation.", h, t0, check.particle,
+                    check.u);
+        }
         reb_simulation_warning(r, msg);
     }
     pfvi_commit_step(r, st, N, h);

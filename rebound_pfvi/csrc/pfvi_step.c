@@ -404,6 +404,7 @@ int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_
     out->kappa = 0.;
     out->pericentre = SIZE_MAX;
     out->refuse = 0;
+    out->saturated = 0;
     // The largest u any stage values give: |D| <= sum |w_k| A.
     double weights_sum = 2.;
     if (s > 2){
@@ -416,7 +417,8 @@ int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_
     // (Also at the warning level: the estimate saturates, and a step across
     // the pericentre of e = 0.9 at 3 steps per orbit read 0.093 per orbit
     // while it ejected the body: issue 40.)
-    if (!(out->u <= PFVI_FIXED_GATE*u_bound) || out->error > PFVI_FIXED_WARN){
+    out->saturated = !(out->u <= PFVI_FIXED_GATE*u_bound);
+    if (out->saturated || out->error > PFVI_FIXED_WARN){
         // The stages' estimate is bounded (|D| <= sum |w_k| A): at s = 8 it
         // stays below 0.01 however long the step, and a step over several
         // orbits can converge to a root that is no motion at all. So a step
