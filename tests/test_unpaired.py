@@ -127,3 +127,38 @@ def test_a_close_pass_of_the_origin_is_resolved():
     sim.integrate(2 * math.pi)
     assert sim.integrator.n_unresolved == 0
     assert off(sim, ref) < 1e-9   # measured 2.5e-13 in 119 steps (IAS15: 435)
+
+
+def test_a_first_step_far_beyond_the_orbit_is_retaken_until_resolved():
+    # sim.dt = 20 (3 orbits) from the pericentre of e = 0.99: the stages' u
+    # saturates, so each retake shortens by a bounded factor. The first
+    # version kept the step after 5 retakes, unresolved and unsaid: 1.7 off
+    # (a hostile trial of this control).
+    ref = in_potential("ias15", 0.99)
+    ref.integrate(2 * math.pi)
+    sim = in_potential("pfvi", 0.99, dt=20.0)
+    sim.integrate(2 * math.pi)
+    assert sim.integrator.n_unresolved == 0
+    assert off(sim, ref) < 1e-6   # measured 1.2e-7 (20 orbits)
+
+
+def test_a_force_that_jumps_is_kept_unresolved_and_said_once():
+    # A step in the force at r = 1.5 (no step resolves it): kept after the
+    # retakes, counted, and said once, not retaken for ever.
+    def jump(simp):
+        for p in simp.contents.particles:
+            r = math.sqrt(p.x * p.x + p.y * p.y + p.z * p.z)
+            f = -(1.0 if r < 1.5 else 1.2) / r**3
+            p.ax += f * p.x
+            p.ay += f * p.y
+            p.az += f * p.z
+
+    sim = rebound.Simulation()
+    sim.add(m=0.0, x=1.0, vy=1.2)
+    sim.additional_forces = jump
+    sim.integrator = "pfvi"
+    with pytest.warns(RuntimeWarning, match="kept unresolved") as said:
+        sim.integrate(30.0)
+    assert sum("kept unresolved" in str(w.message) for w in said) == 1
+    assert sim.integrator.n_unresolved > 0
+    assert sim.integrator.n_rejected < 60 * sim.integrator.n_steps

@@ -278,6 +278,14 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 #define PFVI_UNPAIRED_AIM 1.4
 #define PFVI_UNPAIRED_SAFETY 0.9
 #define PFVI_UNPAIRED_RETAKE 1.25
+// A retake that lowered u below this fraction of the last is still helping.
+#define PFVI_UNPAIRED_HELPING 0.9
+// A retake that ends below this fraction of the aim left behind what made
+// the first trial coarse: a force that jumps there would be approached in
+// ever shorter steps (sim.dt 0.001 ended in a step of 3e-16 and a refusal at
+// a jump of the force at r = 1.5); after RESOLUTION_RETRIES such steps in a
+// row the next coarse first trial is kept, unresolved.
+#define PFVI_UNPAIRED_SUSPECT 0.2
 // Fixed steps (epsilon = 0) are checked as the symmetric steps are: the
 // error per orbit their stages imply (pfvi_resolution_error; for a fitted
 // step from the residual its fitted path does not carry). Above FIXED_WARN
@@ -1029,6 +1037,10 @@ struct pfvi_state {
     int fixed_warned;
     // A step was kept unresolved and REBOUND was told (once per simulation; not saved).
     int unresolved_warned;
+    // Without pairs: consecutive steps retaken to a step that no longer
+    // reached what made the first trial coarse (pfvi_control.c,
+    // control_unpaired; saved).
+    int unpaired_suspect;
 
     // Scratch
     size_t N_allocated;

@@ -609,6 +609,24 @@ static void replay_remove(struct pfvi_state* st, size_t k){
     st->replay_n--;
 }
 
+// A step kept though its stages do not resolve the forces: counted, and
+// said once per simulation (kept silently, such steps made a
+// velocity-dependent force without its flag 40 times IAS15's error: a
+// hostile trial).
+static void count_unresolved(struct reb_simulation* r, struct pfvi_state* st, double t0){
+    st->statistics.n_unresolved++;
+    if (st->unresolved_warned){
+        return;
+    }
+    st->unresolved_warned = 1;
+    char msg[REB_STRING_SIZE_MAX];
+    // (REBOUND keeps 254 characters of a message.)
+    snprintf(msg, sizeof(msg), "pfvi: step at t = %.6g kept unresolved after " PFVI_STR(PFVI_RESOLUTION_RETRIES)
+            " retakes (n_unresolved): epsilon not met there. Forces that jump within a step, or depend on "
+            "velocities without sim.force_is_velocity_dependent = 1, do this. Said once.", t0);
+    reb_simulation_warning(r, msg);
+}
+
 // Without pairs (gravity off, or no massive body: test particles in a
 // potential given by additional_forces) there is no density to track. Each
 // step is then sized by its own stages: their resolution u (h times the
@@ -626,7 +644,7 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
         double sign, const struct pfvi_symmetric_constants* constants){
     const int s = st->options.stages;
     const double u_aim = PFVI_UNPAIRED_AIM*constants->kappa;
-    double h = fabs(r->dt), u = 0.;
+    double h = fabs(r->dt), u = 0., u_last = INFINITY;
     int retakes = 0, unresolved = 0;
     struct pfvi_field field;
     for (;;){
@@ -641,8 +659,17 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
                 return 0.;
             }
             u = symmetric_resolution(r, st, N, sign*h, &field, constants->above);
+            // Retaken while shorter steps resolve the forces better (a first
+            // sim.dt far beyond the orbit: the stages' u saturates, so each
+            // retake shortens by a bounded factor); kept after
+            // RESOLUTION_RETRIES retakes that stopped helping (forces that
+            // jump), or after CONTROL_MAX_REJECTIONS in all.
             const int coarse = u > PFVI_UNPAIRED_RETAKE*u_aim;
-            unresolved = coarse && retakes == PFVI_RESOLUTION_RETRIES;
+            const int helping = u < PFVI_UNPAIRED_HELPING*u_last;
+            unresolved = coarse && ((retakes >= PFVI_RESOLUTION_RETRIES && !helping)
+                || retakes >= PFVI_CONTROL_MAX_REJECTIONS
+                || (retakes == 0 && st->unpaired_suspect >= PFVI_RESOLUTION_RETRIES));
+            u_last = u;
             if (!coarse || unresolved){
                 break;
             }
@@ -664,8 +691,12 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
     pfvi_commit_step(r, st, N, sign*h);
     st->rho = 0.;
     if (unresolved){
-        st->statistics.n_unresolved++;
+        count_unresolved(r, st, t0);
     }
+    // (Counted over the steps in between too, which the proposal keeps as
+    // short: a step that resolves its forces near the aim ends the count.)
+    const int low = u < PFVI_UNPAIRED_SUSPECT*u_aim;
+    st->unpaired_suspect = (unresolved || !low) ? 0 : st->unpaired_suspect + (retakes > 0);
     {
         static const double constant[PFVI_STAGES_MAX + 1] = PFVI_SYMMETRIC_CONSTANTS;
         static const double resolution_constant[PFVI_STAGES_MAX + 1] = PFVI_RESOLUTION_CONSTANTS;
@@ -940,18 +971,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     int asymmetric = shortened;
     if (unresolved){
         // Shorter steps did not help: the density was right, keep its scale.
-        st->statistics.n_unresolved++;
-        if (!st->unresolved_warned){
-            // Kept silently, such steps made a velocity-dependent force
-            // without its flag 40 times IAS15's error (a hostile trial).
-            st->unresolved_warned = 1;
-            char msg[REB_STRING_SIZE_MAX];
-            // (REBOUND keeps 254 characters of a message.)
-            snprintf(msg, sizeof(msg), "pfvi: step at t = %.6g kept unresolved after " PFVI_STR(PFVI_RESOLUTION_RETRIES)
-                    " retakes (n_unresolved): epsilon not met there. Forces that jump within a step, or depend on "
-                    "velocities without sim.force_is_velocity_dependent = 1, do this. Said once.", t0);
-            reb_simulation_warning(r, msg);
-        }
+        count_unresolved(r, st, t0);
         t.rho *= lambda0/lambda;
         t.length = kappa/t.rho;
         t.remaining = t.length;

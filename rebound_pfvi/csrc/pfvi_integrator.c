@@ -317,6 +317,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_POINTER, "variational_stage_positions", offsetof(struct pfvi_state, var_predictor_x),
         offsetof(struct pfvi_state, var_predictor_N), sizeof(*((struct pfvi_state*)0)->var_predictor_x), 0 },
     { "", REB_DOUBLE, "dt_reversible", offsetof(struct pfvi_state, dt_reversible), 0, 0, 0 },
+    { "", REB_INT, "unpaired_suspect", offsetof(struct pfvi_state, unpaired_suspect), 0, 0, 0 },
     { "", REB_DOUBLE, "rho", offsetof(struct pfvi_state, rho), 0, 0, 0 },
     { "", REB_DOUBLE, "rho_sign", offsetof(struct pfvi_state, rho_sign), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_proposed", offsetof(struct pfvi_state, dt_proposed), 0, 0, 0 },
