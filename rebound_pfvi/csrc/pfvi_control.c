@@ -640,11 +640,38 @@ static void count_unresolved(struct reb_simulation* r, struct pfvi_state* st, do
 // steps were sim.dt whatever epsilon asked: a test particle of e = 0.9 in a
 // Kepler potential from additional_forces ended 140 off IAS15 at sim.dt = 1
 // with no warning (a hostile trial).
+// The shortest |v|/|a| at the step's start over the bodies that move and
+// are pulled (0 if none): about the time a body takes to turn.
+static double unpaired_time_scale(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
+    double least = INFINITY;
+    for (size_t i=0; i<N; i++){
+        const struct reb_particle* const p = &r->particles[i];
+        const double* const a = st->end[i].a;
+        const double v2 = p->vx*p->vx + p->vy*p->vy + p->vz*p->vz;
+        const double a2 = a[0]*a[0] + a[1]*a[1] + a[2]*a[2];
+        if (v2 > 0. && a2 > 0.){
+            const double tau = sqrt(v2/a2);
+            least = (tau < least) ? tau : least;
+        }
+    }
+    return isfinite(least) ? least : 0.;
+}
+
 static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
         double sign, const struct pfvi_symmetric_constants* constants){
     const int s = st->options.stages;
     const double u_aim = PFVI_UNPAIRED_AIM*constants->kappa;
     double h = fabs(r->dt), u = 0., u_last = INFINITY;
+    if (!(st->dt_proposed != 0. && h == fabs(st->dt_proposed))){
+        // A step this run did not propose (the first, the user's, REBOUND's
+        // restored last step) is at most the shortest |v|/|a| of a moving
+        // body: the stages' u saturates on steps far beyond the orbit, so
+        // retakes from there shorten too little (sim.dt = 200 from the
+        // pericentre of e = 0.99 ejected the body; REBOUND's 0.001 an orbit
+        // of a = 3e-4: a hostile trial).
+        const double tau = unpaired_time_scale(r, st, N);
+        h = (tau > 0. && h > tau) ? tau : h;
+    }
     int retakes = 0, unresolved = 0;
     struct pfvi_field field;
     for (;;){

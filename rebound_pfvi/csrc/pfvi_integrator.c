@@ -570,9 +570,19 @@ static void pfvi_report(struct reb_simulation* r, const struct pfvi_state* st){
                     "cannot carry; step not taken, state restored. Use stages = 2 or larger time units.", f->h, f->n);
             break;
         case PFVI_FAULT_NOT_CONVERGED:
-            pfvi_error(r, "pfvi: the %zu-stage solve did not converge (relative change %.3g after %d iterations) "
-                    "in the step from t = %.17g; step not taken, state restored. Lower dt.",
-                    f->n, f->value, (int)f->rounds, f->t0);
+            if (st->options.epsilon > 0.){
+                // (The control halved the step down to t's rounding: more
+                // steps would not help; forces that are not smooth can leave
+                // the stage equations without a solution.)
+                pfvi_error(r, "pfvi: the %zu-stage solve did not converge (relative change %.3g after %d iterations) "
+                        "in the step from t = %.17g, down to t's rounding; step not taken, state restored. A force "
+                        "that jumps or has a cusp there can leave no solution: smooth it, or take fixed steps "
+                        "(epsilon = 0).", f->n, f->value, (int)f->rounds, f->t0);
+            }else{
+                pfvi_error(r, "pfvi: the %zu-stage solve did not converge (relative change %.3g after %d iterations) "
+                        "in the step from t = %.17g; step not taken, state restored. Lower dt.",
+                        f->n, f->value, (int)f->rounds, f->t0);
+            }
             break;
         case PFVI_FAULT_REJECTED:
             pfvi_error(r, "pfvi: no step from t = %.17g meets epsilon = %g (estimate %.3g at dt = %.3g after %d "
