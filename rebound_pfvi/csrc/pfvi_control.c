@@ -685,7 +685,11 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
                 pfvi_roll_back(r, st, N, t0);
                 return 0.;
             }
-            u = symmetric_resolution(r, st, N, sign*h, &field, constants->above);
+            // (Of a fitted step, what its fitted path does not carry: the
+            // oscillator at its own frequency is exact at any step, and keeps
+            // sim.dt, as the seed's fixed steps did.)
+            u = pow(factorial(s - 1)*pfvi_trial_resolution(r, st, N, sign*h, &field, constants->above, 1).ratio,
+                1./(s - 1.));
             // Retaken while shorter steps resolve the forces better (a first
             // sim.dt far beyond the orbit: the stages' u saturates, so each
             // retake shortens by a bounded factor); kept after
