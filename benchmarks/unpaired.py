@@ -4,7 +4,14 @@ additional_forces and on a user's own gravity (docs/adaptive.md, "Without
 pairs"). Each run's error is its largest position difference from IAS15 at
 epsilon 1e-11 after 30 time units; CPU time best of --repeats.
 
-    python -P benchmarks/unpaired.py [--repeats 3]
+    python -P benchmarks/unpaired.py [--repeats 3] [--workflows]
+
+--workflows instead runs each scene as users do: epsilon 1e-6, 1e-8 and
+1e-10, one integrate() call and 37 outputs (errors against IAS15), a round
+trip to 30 and back at 1e-9; and a dense sweep of a test particle in the
+Kepler potential at the defaults from REBOUND's first sim.dt (e = 0 ...
+0.99 every 0.01, four starting phases and inclinations up to retrograde,
+10 outputs over 3 orbits, then back to 0 with sim.dt flipped).
 """
 import argparse
 import math
@@ -101,10 +108,71 @@ def run(scene, integrator, epsilon):
     return sim, time.process_time() - start, force
 
 
+def off(sim, reference):
+    return max(math.dist((p.x, p.y, p.z), (q.x, q.y, q.z)) for p, q in zip(sim.particles, reference.particles))
+
+
+def pfvi_run(scene, epsilon, outputs):
+    sim, force = build(scene)
+    sim.integrator = "pfvi"
+    sim.integrator.epsilon = epsilon
+    for k in range(1, outputs + 1):
+        sim.integrate(T_END * k / outputs)
+    return sim, force
+
+
+def workflows():
+    print("| scene | epsilon | error, one call | error, 37 outputs | round trip at 1e-9 |")
+    print("|---|---|---|---|---|")
+    for scene in SCENES:
+        reference, _, _ = run(scene, "ias15", 1e-11)
+        sim, _ = pfvi_run(scene, 1e-9, 1)
+        sim.integrate(0.0)
+        back = off(sim, build(scene)[0])
+        for epsilon in (1e-6, 1e-8, 1e-10):
+            one, _ = pfvi_run(scene, epsilon, 1)
+            many, _ = pfvi_run(scene, epsilon, 37)
+            print(f"| {scene} | {epsilon:g} | {off(one, reference):.1e} | {off(many, reference):.1e} | {back:.1e} |")
+    worst, worst_back, runs = 0.0, 0.0, 0
+    for i in range(100):
+        e = i / 100.0
+        for f, inc in ((0.0, 0.0), (math.pi / 2, 1.0), (math.pi, 2.5), (4.0, math.pi)):
+            sims = []
+            for integrator in ("ias15", "pfvi"):
+                sim = rebound.Simulation()
+                sim.add(m=1.0)
+                sim.add(m=0.0, a=1.0, e=e, f=f, inc=inc)
+                sim.remove(0)
+                sim.additional_forces = kepler_potential
+                sim.integrator = integrator
+                if integrator == "ias15":
+                    sim.integrator.epsilon = 1e-11
+                for k in range(1, 11):
+                    sim.integrate(6 * math.pi * k / 10)
+                sims.append(sim)
+            reference, sim = sims
+            scale = sim.integrator.epsilon_effective * 3   # epsilon_effective a n, 3 orbits
+            worst = max(worst, off(sim, reference) / scale)
+            begin = rebound.Simulation()
+            begin.add(m=1.0)
+            begin.add(m=0.0, a=1.0, e=e, f=f, inc=inc)
+            begin.remove(0)
+            sim.dt = -sim.dt
+            sim.integrate(0.0)
+            worst_back = max(worst_back, off(sim, begin))
+            runs += 1
+    print(f"\nDense sweep at the defaults: {runs} runs, largest error {worst:.2g} epsilon_effective a n, "
+          f"largest round trip {worst_back:.1e}")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--workflows", action="store_true")
     args = parser.parse_args(argv)
+    if args.workflows:
+        workflows()
+        return
     print("| scene | integrator | epsilon | error | steps | CPU time (ms) |")
     print("|---|---|---|---|---|---|")
     for scene in SCENES:

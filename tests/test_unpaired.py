@@ -59,7 +59,7 @@ def test_epsilon_is_met_without_pairs(e, f):
             sim = in_potential("pfvi", e, f, epsilon=epsilon, dt=dt)
             sim.integrate(T)
             errors[epsilon, dt] = off(sim, ref)
-            # Measured at most 3.3e-8 (epsilon 1e-6) and 4.3e-11 (1e-10),
+            # Measured at most 3.4e-8 (epsilon 1e-6) and 3.4e-11 (1e-10),
             # e = 0.99 from pericentre, in 646 and 870 steps (IAS15 at
             # 1e-11: 3085); the build before: 140 at sim.dt = 1, and 2.4e-10
             # in 62832 steps at REBOUND's sim.dt of 0.001.
