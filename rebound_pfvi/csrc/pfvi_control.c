@@ -627,19 +627,6 @@ static void count_unresolved(struct reb_simulation* r, struct pfvi_state* st, do
     reb_simulation_warning(r, msg);
 }
 
-// Without pairs (gravity off, or no massive body: test particles in a
-// potential given by additional_forces) there is no density to track. Each
-// step is then sized by its own stages: their resolution u (h times the
-// rate their forces vary at, the resolution check's measure) is aimed at
-// PFVI_UNPAIRED_AIM of the Kepler worst u_target, as an explicit method's
-// embedded estimate steers it; not time-symmetric (n_asymmetric). A step
-// the resolution check would retake is retaken at the step that resolves
-// it, one whose solve does not converge at half (each counted in
-// n_rejected). Forces that do not vary over a step (free motion, a uniform
-// field: u = 0) leave the step as it was, sim.dt at the start. Before, the
-// steps were sim.dt whatever epsilon asked: a test particle of e = 0.9 in a
-// Kepler potential from additional_forces ended 140 off IAS15 at sim.dt = 1
-// with no warning (a hostile trial).
 // The shortest |v|/|a| at the step's start over the bodies that move and
 // are pulled (0 if none): about the time a body takes to turn.
 static double unpaired_time_scale(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
@@ -657,6 +644,19 @@ static double unpaired_time_scale(const struct reb_simulation* r, const struct p
     return isfinite(least) ? least : 0.;
 }
 
+// Without pairs (gravity off, or no massive body: test particles in a
+// potential given by additional_forces) there is no density to track. Each
+// step is then sized by its own stages: their resolution u (h times the
+// rate their forces vary at, the resolution check's measure; of a fitted
+// step, of the force its fitted path does not carry) is aimed at
+// PFVI_UNPAIRED_AIM kappa, as an explicit method's embedded estimate steers
+// it; not time-symmetric (n_asymmetric). A step above PFVI_UNPAIRED_RETAKE
+// times the aim is retaken shorter, one whose solve does not converge at
+// half (each counted in n_rejected). Forces that do not vary over a step
+// (free motion, a uniform field: u = 0) leave the step as it was, sim.dt at
+// the start. Before, the steps were sim.dt whatever epsilon asked: a test
+// particle of e = 0.9 in a Kepler potential from additional_forces ended
+// 140 off IAS15 at sim.dt = 1 with no warning (a hostile trial).
 static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
         double sign, const struct pfvi_symmetric_constants* constants){
     const int s = st->options.stages;
