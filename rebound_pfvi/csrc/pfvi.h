@@ -342,6 +342,31 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // written before the fold carried up to 1e-9 |t| after 1e7 held steps):
 // set by hand or an edited archive, it is dropped.
 #define PFVI_T_LO_MAX 1e-9
+// A fresh track starts as the track begun at the leading orbit's last
+// pericentre (a grid point there, rho = lambda sigma) would find the state
+// (pfvi_control.c, pericentre_start): on the curve that track follows, and
+// on its grid (the first step ends the interval the state lies in). Where
+// the other density terms are a small part: (sigma/term)^8 <=
+// TRACK_START_SHARE (the leading pair counts 2). The start lambda sigma +
+// kappa g/2 put the track elsewhere on a curve about 8% below the density
+// (the mismatch average near -0.09 from apocentre, +0.01 from pericentre)
+// that swings about it over many orbits, and near a whole number of steps
+// per orbit the orbits' errors added up. Kepler pairs over 100 orbits, e =
+// 0.1 ... 0.95 from 8 phases (benchmarks/commensurate_steps.py --sweep):
+// the largest error per orbit 6.5, 13, 66, 23 epsilon a at epsilon 1e-6
+// (default), 1e-7, 3e-8, 1e-8 before, 1.3, 4.7, 0.83, 1.04 so, for 6.5%,
+// 6.3%, 5.3% and 4.5% more steps. At most TRACK_START_STEPS of the
+// emulated track's steps (else the old start).
+// Below TRACK_START_E the two starts differ little and the orbits' errors
+// are far below epsilon (the fitting carries a circle exactly): the start
+// is the old one, a grid point. A state within TRACK_START_SNAP of an
+// interval's end starts an interval there (no sliver of a step; at 0.05
+// the sweep's worst runs rose from 0.41 to 1.29 epsilon a per orbit at
+// 1e-6, from 1.04 to 1.74 at 1e-8).
+#define PFVI_TRACK_START_SHARE 3.
+#define PFVI_TRACK_START_E 0.1
+#define PFVI_TRACK_START_SNAP 0.01
+#define PFVI_TRACK_START_STEPS 4096
 #define PFVI_TRACK_MISMATCH_WEIGHT (1./32.)
 #define PFVI_TRACK_MISMATCH_MAX 0.1
 // The steady track (pfvi_control.c, docs/roundoff.md): with three or more
@@ -705,6 +730,15 @@ struct pfvi_field {
     size_t blocks_N;
 };
 
+// The orbit whose Kepler term is the density's largest: the body's position
+// and velocity relative to its subsystem's barycentre, mu = G (m_i + M), and
+// the term (pfvi_step_density).
+struct pfvi_lead_orbit {
+    double r[3], v[3];
+    double mu;
+    double term;
+};
+
 // A body's partner: the attracting body j != i (j < N_active, m_j > 0), or
 // ghost image of one, of largest (m_i + m_j)/r^3 (r softened), the tightest
 // pair i is in; the first of equal stiffnesses wins.
@@ -722,10 +756,12 @@ PFVI_INTERNAL void pfvi_partner_search(const struct reb_particle* p, size_t N, c
 // the accelerations of `start`, or p's own if NULL) and its logarithmic
 // time derivative: the smooth maximum of each body's Kepler term about the
 // subsystem it orbits and each unbound pair's encounter term, for the
-// method of order 2s - 2. Fills partners.
+// method of order 2s - 2. Fills partners, and lead (if not NULL) with the
+// orbit of the largest Kepler term (lead->term 0: none).
 // Returns 0 (sigma = 0) if no body has a partner.
 PFVI_INTERNAL int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state* start, size_t N,
-        const struct pfvi_field* f, int s, struct pfvi_partner* partners, double* sigma, double* dlog_sigma);
+        const struct pfvi_field* f, int s, struct pfvi_partner* partners, double* sigma, double* dlog_sigma,
+        struct pfvi_lead_orbit* lead);
 // How well a step's s stages resolve one particle's force: |D|/A, D the
 // leading coefficient of the polynomial through the values f[k] (the stage
 // accelerations, or what a fitted step's quadrature carries of them;
@@ -927,6 +963,7 @@ struct pfvi_steady {
 struct pfvi_replay {
     double t_start, t_end, sign;
     int pin;    // a time-symmetric step logged as a pin (PFVI_REPLAY_PIN_EVERY)
+    int placed; // the first step of a track placed inside an interval (pfvi_control.c)
     PFVI_TRACK_FIELDS(PFVI_FIELD_DECLARE)
 };
 #undef PFVI_FIELD_DECLARE
@@ -998,6 +1035,7 @@ struct pfvi_state {
     double density_scale;
     double dt_last_full;
     int track_edited;       // the track was dropped for an edit of the particles (until the next step is taken)
+    int track_edited_before;    // so was the last step's (pfvi_control.c: a fresh track's alignment)
     double track_mismatch;  // the average mismatch of rho and lambda sigma (PFVI_TRACK_MISMATCH_WEIGHT)
     double track_seen_lo;   // the time the average has seen: intervals a reversal retraces
     double track_seen_hi;   // within it are not averaged again (pfvi_control.c)
@@ -1065,6 +1103,7 @@ struct pfvi_state {
     // The partners at the start of the step being taken, for the resolution
     // check of the symmetric control, which reads both ends' (pfvi_control.c).
     struct pfvi_partner* partners_start;
+    struct pfvi_partner* partners_scratch;   // a fresh track's placement (pfvi_control.c)
     struct reb_vec6d* images;      // the ghost boxes' shifts (pfvi_field_of)
     size_t images_allocated;
     double* omega_end;

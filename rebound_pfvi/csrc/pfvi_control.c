@@ -371,11 +371,107 @@ static void symmetric_discard_implausible(struct pfvi_state* st, double sigma){
     }
 }
 
+// A Kepler orbit's eccentric anomaly at mean anomaly M (Newton's iteration).
+static double eccentric_anomaly(double M, double e){
+    double E = (e < 0.8) ? M : M_PI;
+    for (int k=0; k<64; k++){
+        const double d = (E - e*sin(E) - M)/(1. - e*cos(E));
+        E -= d;
+        if (fabs(d) < 1e-12){
+            break;
+        }
+    }
+    return E;
+}
+
+// Where a fresh track starts: its first interval's rho, a multiple of lambda
+// sigma at the state, and the fraction of that interval before the state.
+struct track_start {
+    double ratio;
+    double done;
+};
+
+// A fresh track in direction `sign` started as the track begun at the
+// leading orbit's last pericentre (rho = lambda sigma there, a grid point)
+// finds the state: that track run along the Kepler orbit (pfvi.h,
+// PFVI_TRACK_START_SHARE), and the interval of it the state lies in (the
+// first step, ending that interval, is logged: a reversal takes it back to
+// the state). Returns 0 where it does not apply (no orbit leads the density,
+// or it is not bound): the start is then a grid point at lambda sigma +
+// kappa g/2.
+static int pericentre_start(const struct reb_simulation* r, struct pfvi_state* st, size_t N, double kappa,
+        double sign, struct track_start* start){
+    struct pfvi_field field;
+    struct pfvi_lead_orbit lead;
+    double sigma = 0., g = 0.;
+    if (!pfvi_field_of(r, st, &field)
+            || !pfvi_step_density(r->particles, NULL, N, &field, st->options.stages, st->partners_scratch, &sigma, &g,
+                &lead)
+            || !(lead.term > 0.)){
+        return 0;
+    }
+    // The other terms (the leading pair counts twice) are a small part.
+    const double others = pow(sigma/lead.term, PFVI_DENSITY_NORM);
+    if (!(others <= PFVI_TRACK_START_SHARE)){
+        return 0;
+    }
+    const double* const x = lead.r;
+    const double* const v = lead.v;
+    const double rn = sqrt(x[0]*x[0] + x[1]*x[1] + x[2]*x[2]);
+    const double v2 = v[0]*v[0] + v[1]*v[1] + v[2]*v[2];
+    const double rv = x[0]*v[0] + x[1]*v[1] + x[2]*v[2];
+    const double inverse_a = 2./rn - v2/lead.mu;
+    if (!(inverse_a > 0.) || !(rn > 0.)){
+        return 0;
+    }
+    const double a = 1./inverse_a;
+    const double ecos = 1. - rn/a, esin = rv/sqrt(lead.mu*a);
+    const double e = hypot(ecos, esin);
+    if (!(e >= PFVI_TRACK_START_E && e < 1.)){
+        return 0;
+    }
+    // In units of the orbit (a = 1, mean motion 1): lambda sigma is c tau(M),
+    // tau = ((1 - e cos E)^2 + s2)^(-3/4) (c from the state), its rate
+    // -3/2 e sin E/((1 - e cos E)^2 + s2); a way back is the way forward on
+    // the mirrored orbit.
+    const double s2 = field.softening2/(a*a);
+    const double E0 = atan2(esin, ecos);
+    double M0 = E0 - esin;
+    M0 = (M0 < 0.) ? M0 + 2.*M_PI : M0;
+    M0 = (sign < 0. && M0 > 0.) ? 2.*M_PI - M0 : M0;
+    const double q0 = rn/a;
+    const double c = st->density_scale*sigma/(sqrt(lead.mu*inverse_a*inverse_a*inverse_a)*pow(q0*q0 + s2, -0.75));
+    double M = 0., rho = c*pow((1. - e)*(1. - e) + s2, -0.75);
+    for (int k=0; k<PFVI_TRACK_START_STEPS; k++){
+        const double h = kappa/rho;
+        const double E1 = eccentric_anomaly(M + h, e);
+        const double q = 1. - e*cos(E1), d2 = q*q + s2;
+        const double rho1 = rho - 1.5*kappa*e*sin(E1)/d2;
+        if (M + h > M0){
+            // The state lies in this interval, a fraction of it done (at an
+            // end within TRACK_START_SNAP: that end's interval, from it).
+            const double done = (M0 - M)/h;
+            const int next = (1. - done < PFVI_TRACK_START_SNAP);
+            start->ratio = (next ? rho1 : rho)/(c*pow(q0*q0 + s2, -0.75));
+            start->done = (next || done < PFVI_TRACK_START_SNAP) ? 0. : done;
+            return isfinite(start->ratio) && start->ratio > 0.5 && start->ratio < 2.
+                && start->done >= 0. && start->done < 1.;
+        }
+        if (!(rho1 > 0.)){
+            return 0;
+        }
+        M += h;
+        rho = rho1;
+    }
+    return 0;
+}
+
 // The track at a step in direction `sign` from a state of density sigma and
 // rate g: a retrace on a reversal, the rest of an interval a capped step
-// left, the next interval (the Hairer & Soderlind update), or a fresh start.
+// left, the next interval (the Hairer & Soderlind update), or a fresh start
+// (placed by pericentre_start where `start` is given).
 static struct track_position symmetric_position(const struct pfvi_state* st, double sign, double kappa,
-        double sigma, double g){
+        double sigma, double g, const struct track_start* start){
     struct track_position t = {0., 0., 0., 0.};
     const int track = symmetric_on_track(st, kappa);
     if (track && sign != st->rho_sign){
@@ -398,14 +494,16 @@ static struct track_position symmetric_position(const struct pfvi_state* st, dou
     if (track){
         t.rho = st->steady.hold ? st->rho : st->rho + sign*kappa*g;
     }
+    double done = 0.;
     if (!(t.rho > 0.) || !isfinite(t.rho)){
         const double scaled = st->density_scale*sigma;
-        t.rho = scaled + 0.5*sign*kappa*g;
+        t.rho = start ? scaled*start->ratio : scaled + 0.5*sign*kappa*g;
         t.rho = (t.rho > 0. && isfinite(t.rho)) ? t.rho : scaled;
+        done = start ? start->done : 0.;
     }
     t.length = kappa/t.rho;
-    t.done = 0.;
-    t.remaining = t.length;
+    t.done = done*t.length;
+    t.remaining = t.length - t.done;
     return t;
 }
 
@@ -415,12 +513,20 @@ static struct track_position symmetric_position(const struct pfvi_state* st, dou
 // after a density jump, measured 16 places short with a drag force), so the
 // interval is taken as ended there and the next one begins (without this
 // the run stopped: "the step dt = 5.55e-17 does not change t").
-static struct track_position symmetric_position_at(struct pfvi_state* st, double t_at, double sign, double kappa,
-        double sigma, double g){
-    struct track_position t = symmetric_position(st, sign, kappa, sigma, g);
-    if (t.done > 0. && t.remaining > 0. && t_at + sign*t.remaining == t_at){
+static struct track_position symmetric_position_at(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
+        double sign, double kappa, double sigma, double g){
+    struct track_start start;
+    // A track dropped for an edit again right after one (a mass lost every
+    // step) starts at a grid point as before: each restart would anchor the
+    // grid at the edited orbit's last pericentre anew, and cross a part of
+    // an interval once an orbit where that moved (41 steps for the unedited
+    // run's 35; 36 so).
+    const int again = st->track_edited && st->track_edited_before;
+    const int placed = !symmetric_on_track(st, kappa) && !again && pericentre_start(r, st, N, kappa, sign, &start);
+    struct track_position t = symmetric_position(st, sign, kappa, sigma, g, placed ? &start : NULL);
+    if (t.done > 0. && t.remaining > 0. && r->t + sign*t.remaining == r->t){
         st->track_at_end = 1;
-        t = symmetric_position(st, sign, kappa, sigma, g);
+        t = symmetric_position(st, sign, kappa, sigma, g, NULL);
     }
     return t;
 }
@@ -570,11 +676,17 @@ void pfvi_replay_clear(struct pfvi_state* st){
     st->replay_count[0] = st->replay_count[1] = 0;
 }
 
+static void replay_remove(struct pfvi_state* st, size_t k);
+
 static void replay_push(struct pfvi_state* st, const struct pfvi_replay* e){
     if (st->replay_n == PFVI_REPLAY_MAX){
-        st->replay_count[replay_side(st->replay[st->replay_first].sign)]--;
-        st->replay_first = (st->replay_first + 1) % PFVI_REPLAY_MAX;   // the oldest goes
-        st->replay_n--;
+        if (st->replay[st->replay_first].placed){
+            replay_remove(st, 1);   // a placed track's first step stays: a way back ends there
+        }else{
+            st->replay_count[replay_side(st->replay[st->replay_first].sign)]--;
+            st->replay_first = (st->replay_first + 1) % PFVI_REPLAY_MAX;   // the oldest goes
+            st->replay_n--;
+        }
     }
     st->replay[(st->replay_first + st->replay_n) % PFVI_REPLAY_MAX] = *e;
     st->replay_n++;
@@ -792,12 +904,16 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         return control_unpaired(r, st, N, t0, sign, constants);
     }
     symmetric_discard_implausible(st, sigma0);
-    if (!symmetric_on_track(st, kappa)){
+    const int fresh = !symmetric_on_track(st, kappa);
+    if (fresh){
         steady_forget(st);
         st->track_mismatch = 0.;  // a fresh track starts its average afresh
         st->track_seen_lo = st->track_seen_hi = t0;
     }
-    struct track_position t = symmetric_position_at(st, t0, sign, kappa, sigma0, g0);
+    struct track_position t = symmetric_position_at(r, st, N, sign, kappa, sigma0, g0);
+    // A fresh track placed inside an interval (pericentre_start): its first
+    // step is logged, so that a reversal comes back to this state.
+    const int placed = fresh && t.done > 0.;
     // An output time does not cap the step (pfvi_output.c shows it): the
     // step is the one sim.dt as the last step proposed it would give.
     const int output = st->output_uncapped;
@@ -839,7 +955,10 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         // own kappa, if it had a track, says it is this run's.)
         if (e && (e->track_kappa == kappa || !(e->rho > 0.))){
             struct pfvi_field field_replay;
-            const double back = e->t_start - t0;
+            // (The first step of a placed track goes back by its own length:
+            // to the state the run started from, where the way back's t,
+            // rounded differently, may have drifted from the way out's.)
+            const double back = e->placed ? e->t_start - e->t_end : e->t_start - t0;
             // Only REBOUND or the user cap it: not pfvi's own proposal.
             const double replay_cap = (output || (st->dt_proposed != 0. && fabs(r->dt) == fabs(st->dt_proposed)))
                 ? INFINITY : fabs(r->dt);
@@ -850,7 +969,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
                 }
                 if (trial == PFVI_TRIAL_OK && pfvi_field_of(r, st, &field_replay)){
                     double sigma1 = 0., g1 = 0.;
-                    pfvi_step_density(r->particles, NULL, N, &field_replay, o->stages, st->partners, &sigma1, &g1);
+                    pfvi_step_density(r->particles, NULL, N, &field_replay, o->stages, st->partners, &sigma1, &g1, NULL);
                     pfvi_commit_step(r, st, N, back);
                     r->t = e->t_start;
                     replay_restore(st, e);
@@ -859,7 +978,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
                     st->density_dlog = g1;
                     st->density_N = N;
                     st->density_stages = o->stages;
-                    r->dt = sign*symmetric_position_at(st, r->t, sign, kappa, sigma1, g1).remaining;
+                    r->dt = sign*symmetric_position_at(r, st, N, sign, kappa, sigma1, g1).remaining;
                     st->dt_proposed = r->dt;
                     return back;
                 }
@@ -878,7 +997,9 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     before.t_start = t0;
     before.sign = sign;
     before.pin = 0;
+    before.placed = placed;
     replay_keep(st, &before);
+    st->track_edited_before = st->track_edited;
     st->track_edited = 0;
     double h = fmin(t.remaining, cap);
     // The start's partners (the last step's end's, or found at this start by
@@ -904,7 +1025,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
                 pfvi_roll_back(r, st, N, t0);
                 return 0.;
             }
-            pfvi_step_density(r->particles, NULL, N, &field, o->stages, st->partners, &sigma1, &g1);
+            pfvi_step_density(r->particles, NULL, N, &field, o->stages, st->partners, &sigma1, &g1, NULL);
             u = symmetric_resolution_both(r, st, N, sign*h, &field, constants->above);
             // (Both ends: a reversed step makes the same check.)
             const int jump = fmax(sigma0, sigma1)*lambda*h > PFVI_DENSITY_JUMP_MAX*kappa;
@@ -1082,9 +1203,9 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     st->replay_next = split || restart;
     // A pin (PFVI_REPLAY_PIN_EVERY): a whole interval, on the way out (not
     // while a way back retraces logged steps).
-    before.pin = !(asymmetric || split || logged_too) && !restart && !capped && full && t.done == 0.
+    before.pin = !(asymmetric || split || logged_too || placed) && !restart && !capped && full && t.done == 0.
         && st->replay_count[replay_side(-sign)] == 0 && (st->statistics.n_steps + 1) % PFVI_REPLAY_PIN_EVERY == 0;
-    if (asymmetric || split || logged_too || before.pin){
+    if (asymmetric || split || logged_too || placed || before.pin){
         // (A restart of the track and the steady hold's start or end are
         // logged too: the replay restores the track as it was before them.)
         before.t_end = r->t;
@@ -1097,7 +1218,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     st->density_stages = o->stages;
     // Propose exactly the next step, so that REBOUND shortens it only to
     // finish on time; the next step recomputes it the same way.
-    r->dt = sign*symmetric_position_at(st, r->t, sign, kappa, sigma1, g1).remaining;
+    r->dt = sign*symmetric_position_at(r, st, N, sign, kappa, sigma1, g1).remaining;
     st->dt_proposed = r->dt;
     if (!shortened && !split && t.remaining <= cap){
         st->dt_last_full = h;

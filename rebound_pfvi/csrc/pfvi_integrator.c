@@ -326,6 +326,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "track_mismatch", offsetof(struct pfvi_state, track_mismatch), 0, 0, 0 },
     { "", REB_DOUBLE, "track_seen_lo", offsetof(struct pfvi_state, track_seen_lo), 0, 0, 0 },
     { "", REB_DOUBLE, "track_seen_hi", offsetof(struct pfvi_state, track_seen_hi), 0, 0, 0 },
+    { "", REB_INT, "track_edited_before", offsetof(struct pfvi_state, track_edited_before), 0, 0, 0 },
     { "", REB_INT, "steady_hold", offsetof(struct pfvi_state, steady.hold), 0, 0, 0 },
     { "", REB_INT, "steady_n", offsetof(struct pfvi_state, steady.n), 0, 0, 0 },
     { "", REB_DOUBLE, "steady_lo", offsetof(struct pfvi_state, steady.lo), 0, 0, 0 },
@@ -867,7 +868,7 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
             }
             if (symmetric){
                 pfvi_step_density(p0, e, N, &field, o->stages, st->partners,
-                        &st->density_sigma, &st->density_dlog);
+                        &st->density_sigma, &st->density_dlog, NULL);
             }else{
                 pfvi_partner_search(p0, N, &field, st->partners);
             }
@@ -1504,7 +1505,7 @@ int pfvi_density_of(struct reb_simulation* r, int stages, double* out){
         return 0;
     }
     reb_simulation_update_acceleration(r);
-    const int paired = pfvi_step_density(r->particles, NULL, r->N, &field, stages, partners, &out[0], &out[1]);
+    const int paired = pfvi_step_density(r->particles, NULL, r->N, &field, stages, partners, &out[0], &out[1], NULL);
     free(partners);
     free(scratch.images);
     return paired;

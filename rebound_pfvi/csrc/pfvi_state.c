@@ -40,6 +40,7 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->centre);
     free(st->partners);
     free(st->partners_start);
+    free(st->partners_scratch);
     free(st->images);
     free(st->omega_end);
     free(st->osculating_start);
@@ -130,6 +131,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->centre = pfvi_grow(st->centre, N*sizeof(*st->centre), &ok);
     st->partners = pfvi_grow(st->partners, N*sizeof(*st->partners), &ok);
     st->partners_start = pfvi_grow(st->partners_start, N*sizeof(*st->partners_start), &ok);
+    st->partners_scratch = pfvi_grow(st->partners_scratch, N*sizeof(*st->partners_scratch), &ok);
     st->omega_end = pfvi_grow(st->omega_end, N*sizeof(*st->omega_end), &ok);
     st->osculating_start = pfvi_grow(st->osculating_start, N*sizeof(*st->osculating_start), &ok);
     st->unknowns = pfvi_grow(st->unknowns, N*sizeof(*st->unknowns), &ok);

@@ -427,8 +427,8 @@ int pfvi_fixed_step_check(struct reb_simulation* r, struct pfvi_state* st, size_
         // PFVI_FIXED_KAPPA_MAX/sigma covers more than an orbit of the
         // fastest time scale, and is refused.
         double sigma0, sigma1, g;
-        pfvi_step_density(st->start, st->end, N, &field, s, st->partners, &sigma0, &g);
-        pfvi_step_density(r->particles, NULL, N, &field, s, st->partners, &sigma1, &g);
+        pfvi_step_density(st->start, st->end, N, &field, s, st->partners, &sigma0, &g, NULL);
+        pfvi_step_density(r->particles, NULL, N, &field, s, st->partners, &sigma1, &g, NULL);
         const double sigma = fmax(sigma0, sigma1);
         size_t passing = SIZE_MAX;
         const double peri = pericentre_span(st->start, N, &field, st->partners, h, &passing);

@@ -708,10 +708,14 @@ static void __attribute__((constructor)) factor_max_init(void){
 
 PFVI_VECTOR_CLONES
 int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state* start, size_t N,
-        const struct pfvi_field* f, int s, struct pfvi_partner* partners, double* sigma, double* dlog_sigma){
+        const struct pfvi_field* f, int s, struct pfvi_partner* partners, double* sigma, double* dlog_sigma,
+        struct pfvi_lead_orbit* lead){
     const double gamma = eccentricity_exponent(s);
     *sigma = 0.;
     *dlog_sigma = 0.;
+    if (lead){
+        lead->term = 0.;
+    }
     pfvi_partner_search(p, N, f, partners);
     if (!(f->G > 0.)){
         return 0;
@@ -731,6 +735,12 @@ int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state*
         double term, dlog;
         if (subsystem_orbit(p, start, i, f, partners, &o)
                 && kepler_term(&o, f->softening2, gamma, factor_max, PFVI_DENSITY_NEGLIGIBLE*sum.largest, &term, &dlog)){
+            if (lead && term > lead->term){
+                memcpy(lead->r, o.r, sizeof(o.r));
+                memcpy(lead->v, o.v, sizeof(o.v));
+                lead->mu = o.mu;
+                lead->term = term;
+            }
             density_add(&sum, term, dlog, 2.);
         }
     }
