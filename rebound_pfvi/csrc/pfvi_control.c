@@ -399,7 +399,8 @@ struct track_start {
 // the state). Returns 0 where it does not apply (no orbit leads the density,
 // or it is not bound): the start is then a grid point at lambda sigma +
 // kappa g/2.
-static int pericentre_start(const struct reb_simulation* r, struct pfvi_state* st, size_t N, double kappa,
+static __attribute__((noinline, cold)) int pericentre_start(const struct reb_simulation* r, struct pfvi_state* st,
+        size_t N, double kappa,
         double sign, struct track_start* start){
     struct pfvi_field field;
     struct pfvi_lead_orbit lead;
@@ -521,8 +522,8 @@ static struct track_position symmetric_position_at(const struct reb_simulation* 
     // grid at the edited orbit's last pericentre anew, and cross a part of
     // an interval once an orbit where that moved (41 steps for the unedited
     // run's 35; 36 so).
-    const int again = st->track_edited && st->track_edited_before;
-    const int placed = !symmetric_on_track(st, kappa) && !again && pericentre_start(r, st, N, kappa, sign, &start);
+    const int placed = !symmetric_on_track(st, kappa) && !(st->track_edited && st->track_edited_before)
+        && pericentre_start(r, st, N, kappa, sign, &start);
     struct track_position t = symmetric_position(st, sign, kappa, sigma, g, placed ? &start : NULL);
     if (t.done > 0. && t.remaining > 0. && r->t + sign*t.remaining == r->t){
         st->track_at_end = 1;
