@@ -342,31 +342,24 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // written before the fold carried up to 1e-9 |t| after 1e7 held steps):
 // set by hand or an edited archive, it is dropped.
 #define PFVI_T_LO_MAX 1e-9
-// A fresh track starts as the track begun at the leading orbit's last
-// pericentre (a grid point there, rho = lambda sigma) would find the state
-// (pfvi_control.c, pericentre_start): on the curve that track follows, and
-// on its grid (the first step ends the interval the state lies in). Where
-// the other density terms are a small part: (sigma/term)^8 <=
-// TRACK_START_SHARE (the leading pair counts 2). The start lambda sigma +
-// kappa g/2 put the track elsewhere on a curve about 8% below the density
-// (the mismatch average near -0.09 from apocentre, +0.01 from pericentre)
-// that swings about it over many orbits, and near a whole number of steps
-// per orbit the orbits' errors added up. Kepler pairs over 100 orbits, e =
-// 0.1 ... 0.95 from 8 phases (benchmarks/commensurate_steps.py --sweep):
-// the largest error per orbit 6.5, 13, 66, 23 epsilon a at epsilon 1e-6
-// (default), 1e-7, 3e-8, 1e-8 before, 1.3, 4.7, 0.83, 1.04 so, for 6.5%,
-// 6.3%, 5.3% and 4.5% more steps. At most TRACK_START_STEPS of the
-// emulated track's steps (else the old start).
-// Below TRACK_START_E the two starts differ little and the orbits' errors
-// are far below epsilon (the fitting carries a circle exactly): the start
-// is the old one, a grid point. A state within TRACK_START_SNAP of an
-// interval's end starts an interval there (no sliver of a step; at 0.05
-// the sweep's worst runs rose from 0.41 to 1.29 epsilon a per orbit at
-// 1e-6, from 1.04 to 1.74 at 1e-8).
+// A fresh track starts on the curve the track begun at the leading orbit's
+// last pericentre (rho = lambda sigma there) follows (pfvi_control.c,
+// pericentre_start), at a grid point at the state as before, where the
+// other density terms are a small part: (sigma/term)^8 <= TRACK_START_SHARE
+// (the leading pair counts 2). The start lambda sigma + kappa g/2 put a
+// track begun away from pericentre on a curve about 8% below the density
+// (the mismatch average near -0.09 from apocentre, +0.01 from pericentre),
+// swinging about it over many orbits, and where an orbit then took close
+// to a whole number of steps the orbits' errors added up (benchmarks/
+// commensurate_steps.py --sweep; docs/step-control.md, "Where a track
+// starts"). Below TRACK_START_E the two starts differ little and the
+// errors are far below epsilon (the fitting carries a circle exactly); an
+// orbit of more than about TRACK_START_STEPS steps (s = 2 ... 4, or epsilon
+// far below 1e-10) is not run, as the errors there do not add up (and at s =
+// 2 with an edit every other step the emulation cost 100 times the step).
 #define PFVI_TRACK_START_SHARE 3.
 #define PFVI_TRACK_START_E 0.1
-#define PFVI_TRACK_START_SNAP 0.01
-#define PFVI_TRACK_START_STEPS 4096
+#define PFVI_TRACK_START_STEPS 64
 #define PFVI_TRACK_MISMATCH_WEIGHT (1./32.)
 #define PFVI_TRACK_MISMATCH_MAX 0.1
 // The steady track (pfvi_control.c, docs/roundoff.md): with three or more
@@ -963,7 +956,6 @@ struct pfvi_steady {
 struct pfvi_replay {
     double t_start, t_end, sign;
     int pin;    // a time-symmetric step logged as a pin (PFVI_REPLAY_PIN_EVERY)
-    int placed; // the first step of a track placed inside an interval (pfvi_control.c)
     PFVI_TRACK_FIELDS(PFVI_FIELD_DECLARE)
 };
 #undef PFVI_FIELD_DECLARE

@@ -384,24 +384,17 @@ static double eccentric_anomaly(double M, double e){
     return E;
 }
 
-// Where a fresh track starts: its first interval's rho, a multiple of lambda
-// sigma at the state, and the fraction of that interval before the state.
-struct track_start {
-    double ratio;
-    double done;
-};
-
-// A fresh track in direction `sign` started as the track begun at the
-// leading orbit's last pericentre (rho = lambda sigma there, a grid point)
-// finds the state: that track run along the Kepler orbit (pfvi.h,
-// PFVI_TRACK_START_SHARE), and the interval of it the state lies in (the
-// first step, ending that interval, is logged: a reversal takes it back to
-// the state). Returns 0 where it does not apply (no orbit leads the density,
-// or it is not bound): the start is then a grid point at lambda sigma +
-// kappa g/2.
+// A fresh track in direction `sign` starts at the state on the curve the
+// track begun at the leading orbit's last pericentre follows (rho = lambda
+// sigma there): that track is run along the Kepler orbit to the state
+// (pfvi.h, PFVI_TRACK_START_SHARE), and its log(rho/(lambda sigma)) is
+// interpolated between the grid points around the state; *ratio is rho/
+// (lambda sigma) for the fresh track's first interval, a grid point at the
+// state as before. Returns 0 where it does not apply (no bound orbit of e
+// >= TRACK_START_E leads the density, or its orbit takes more than
+// TRACK_START_STEPS steps): the start is then lambda sigma + kappa g/2.
 static __attribute__((noinline, cold)) int pericentre_start(const struct reb_simulation* r, struct pfvi_state* st,
-        size_t N, double kappa,
-        double sign, struct track_start* start){
+        size_t N, double kappa, double sign, double* ratio){
     struct pfvi_field field;
     struct pfvi_lead_orbit lead;
     double sigma = 0., g = 0.;
@@ -436,33 +429,41 @@ static __attribute__((noinline, cold)) int pericentre_start(const struct reb_sim
     // -3/2 e sin E/((1 - e cos E)^2 + s2); a way back is the way forward on
     // the mirrored orbit.
     const double s2 = field.softening2/(a*a);
-    const double E0 = atan2(esin, ecos);
-    double M0 = E0 - esin;
+    double M0 = atan2(esin, ecos) - esin;
     M0 = (M0 < 0.) ? M0 + 2.*M_PI : M0;
     M0 = (sign < 0. && M0 > 0.) ? 2.*M_PI - M0 : M0;
     const double q0 = rn/a;
     const double c = st->density_scale*sigma/(sqrt(lead.mu*inverse_a*inverse_a*inverse_a)*pow(q0*q0 + s2, -0.75));
-    double M = 0., rho = c*pow((1. - e)*(1. - e) + s2, -0.75);
-    for (int k=0; k<PFVI_TRACK_START_STEPS; k++){
+    // The steps an orbit takes, about (c/kappa) times the integral of tau
+    // over the mean anomaly (the integral of (1 - e cos E)^(-1/2) over E,
+    // by the midpoint rule on 16 points): beyond TRACK_START_STEPS, not run.
+    double integral = 0.;
+    for (int k=0; k<16; k++){
+        const double E = (k + 0.5)*M_PI/8.;
+        const double q = 1. - e*cos(E);
+        integral += q*pow(q*q + s2, -0.75);
+    }
+    if (!(c*integral*M_PI/8./kappa <= PFVI_TRACK_START_STEPS)){
+        return 0;
+    }
+    double M = 0., tau = pow((1. - e)*(1. - e) + s2, -0.75), rho = c*tau;
+    for (int k=0; k<2*PFVI_TRACK_START_STEPS; k++){
         const double h = kappa/rho;
         const double E1 = eccentric_anomaly(M + h, e);
         const double q = 1. - e*cos(E1), d2 = q*q + s2;
+        const double tau1 = pow(d2, -0.75);
         const double rho1 = rho - 1.5*kappa*e*sin(E1)/d2;
-        if (M + h > M0){
-            // The state lies in this interval, a fraction of it done (at an
-            // end within TRACK_START_SNAP: that end's interval, from it).
-            const double done = (M0 - M)/h;
-            const int next = (1. - done < PFVI_TRACK_START_SNAP);
-            start->ratio = (next ? rho1 : rho)/(c*pow(q0*q0 + s2, -0.75));
-            start->done = (next || done < PFVI_TRACK_START_SNAP) ? 0. : done;
-            return isfinite(start->ratio) && start->ratio > 0.5 && start->ratio < 2.
-                && start->done >= 0. && start->done < 1.;
-        }
         if (!(rho1 > 0.)){
             return 0;
         }
+        if (M + h > M0){
+            const double w = (M0 - M)/h;
+            *ratio = exp((1. - w)*log(rho/(c*tau)) + w*log(rho1/(c*tau1)));
+            return isfinite(*ratio) && *ratio > 0.5 && *ratio < 2.;
+        }
         M += h;
         rho = rho1;
+        tau = tau1;
     }
     return 0;
 }
@@ -470,9 +471,9 @@ static __attribute__((noinline, cold)) int pericentre_start(const struct reb_sim
 // The track at a step in direction `sign` from a state of density sigma and
 // rate g: a retrace on a reversal, the rest of an interval a capped step
 // left, the next interval (the Hairer & Soderlind update), or a fresh start
-// (placed by pericentre_start where `start` is given).
+// (at `start` times lambda sigma where that is given: pericentre_start).
 static struct track_position symmetric_position(const struct pfvi_state* st, double sign, double kappa,
-        double sigma, double g, const struct track_start* start){
+        double sigma, double g, const double* start){
     struct track_position t = {0., 0., 0., 0.};
     const int track = symmetric_on_track(st, kappa);
     if (track && sign != st->rho_sign){
@@ -495,16 +496,14 @@ static struct track_position symmetric_position(const struct pfvi_state* st, dou
     if (track){
         t.rho = st->steady.hold ? st->rho : st->rho + sign*kappa*g;
     }
-    double done = 0.;
     if (!(t.rho > 0.) || !isfinite(t.rho)){
         const double scaled = st->density_scale*sigma;
-        t.rho = start ? scaled*start->ratio : scaled + 0.5*sign*kappa*g;
+        t.rho = start ? scaled*(*start) : scaled + 0.5*sign*kappa*g;
         t.rho = (t.rho > 0. && isfinite(t.rho)) ? t.rho : scaled;
-        done = start ? start->done : 0.;
     }
     t.length = kappa/t.rho;
-    t.done = done*t.length;
-    t.remaining = t.length - t.done;
+    t.done = 0.;
+    t.remaining = t.length;
     return t;
 }
 
@@ -516,7 +515,7 @@ static struct track_position symmetric_position(const struct pfvi_state* st, dou
 // the run stopped: "the step dt = 5.55e-17 does not change t").
 static struct track_position symmetric_position_at(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
         double sign, double kappa, double sigma, double g){
-    struct track_start start;
+    double start;
     // A track dropped for an edit again right after one (a mass lost every
     // step) starts at a grid point as before: each restart would anchor the
     // grid at the edited orbit's last pericentre anew, and cross a part of
@@ -677,17 +676,11 @@ void pfvi_replay_clear(struct pfvi_state* st){
     st->replay_count[0] = st->replay_count[1] = 0;
 }
 
-static void replay_remove(struct pfvi_state* st, size_t k);
-
 static void replay_push(struct pfvi_state* st, const struct pfvi_replay* e){
     if (st->replay_n == PFVI_REPLAY_MAX){
-        if (st->replay[st->replay_first].placed){
-            replay_remove(st, 1);   // a placed track's first step stays: a way back ends there
-        }else{
-            st->replay_count[replay_side(st->replay[st->replay_first].sign)]--;
-            st->replay_first = (st->replay_first + 1) % PFVI_REPLAY_MAX;   // the oldest goes
-            st->replay_n--;
-        }
+        st->replay_count[replay_side(st->replay[st->replay_first].sign)]--;
+        st->replay_first = (st->replay_first + 1) % PFVI_REPLAY_MAX;   // the oldest goes
+        st->replay_n--;
     }
     st->replay[(st->replay_first + st->replay_n) % PFVI_REPLAY_MAX] = *e;
     st->replay_n++;
@@ -905,16 +898,12 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         return control_unpaired(r, st, N, t0, sign, constants);
     }
     symmetric_discard_implausible(st, sigma0);
-    const int fresh = !symmetric_on_track(st, kappa);
-    if (fresh){
+    if (!symmetric_on_track(st, kappa)){
         steady_forget(st);
         st->track_mismatch = 0.;  // a fresh track starts its average afresh
         st->track_seen_lo = st->track_seen_hi = t0;
     }
     struct track_position t = symmetric_position_at(r, st, N, sign, kappa, sigma0, g0);
-    // A fresh track placed inside an interval (pericentre_start): its first
-    // step is logged, so that a reversal comes back to this state.
-    const int placed = fresh && t.done > 0.;
     // An output time does not cap the step (pfvi_output.c shows it): the
     // step is the one sim.dt as the last step proposed it would give.
     const int output = st->output_uncapped;
@@ -956,10 +945,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         // own kappa, if it had a track, says it is this run's.)
         if (e && (e->track_kappa == kappa || !(e->rho > 0.))){
             struct pfvi_field field_replay;
-            // (The first step of a placed track goes back by its own length:
-            // to the state the run started from, where the way back's t,
-            // rounded differently, may have drifted from the way out's.)
-            const double back = e->placed ? e->t_start - e->t_end : e->t_start - t0;
+            const double back = e->t_start - t0;
             // Only REBOUND or the user cap it: not pfvi's own proposal.
             const double replay_cap = (output || (st->dt_proposed != 0. && fabs(r->dt) == fabs(st->dt_proposed)))
                 ? INFINITY : fabs(r->dt);
@@ -998,7 +984,6 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     before.t_start = t0;
     before.sign = sign;
     before.pin = 0;
-    before.placed = placed;
     replay_keep(st, &before);
     st->track_edited_before = st->track_edited;
     st->track_edited = 0;
@@ -1204,9 +1189,9 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     st->replay_next = split || restart;
     // A pin (PFVI_REPLAY_PIN_EVERY): a whole interval, on the way out (not
     // while a way back retraces logged steps).
-    before.pin = !(asymmetric || split || logged_too || placed) && !restart && !capped && full && t.done == 0.
+    before.pin = !(asymmetric || split || logged_too) && !restart && !capped && full && t.done == 0.
         && st->replay_count[replay_side(-sign)] == 0 && (st->statistics.n_steps + 1) % PFVI_REPLAY_PIN_EVERY == 0;
-    if (asymmetric || split || logged_too || placed || before.pin){
+    if (asymmetric || split || logged_too || before.pin){
         // (A restart of the track and the steady hold's start or end are
         // logged too: the replay restores the track as it was before them.)
         before.t_end = r->t;
