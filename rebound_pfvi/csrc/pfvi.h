@@ -1027,7 +1027,8 @@ struct pfvi_state {
     double density_scale;
     double dt_last_full;
     int track_edited;       // the track was dropped for an edit of the particles (until the next step is taken)
-    int track_edited_before;    // so was the last step's (pfvi_control.c: a fresh track's alignment)
+    int track_edited_before;    // so was the last step's (pfvi_control.c: where a fresh track starts)
+    int track_restarted;        // the last step restarted the track (a density jump; pfvi_control.c)
     double track_mismatch;  // the average mismatch of rho and lambda sigma (PFVI_TRACK_MISMATCH_WEIGHT)
     double track_seen_lo;   // the time the average has seen: intervals a reversal retraces
     double track_seen_hi;   // within it are not averaged again (pfvi_control.c)

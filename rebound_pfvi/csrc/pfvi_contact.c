@@ -456,7 +456,7 @@ static double contact_search(const struct reb_simulation* r, struct pfvi_state* 
 struct contact_snapshot {
     double dt, dt_reversible, rho, rho_sign, dt_proposed, track_done, track_kappa, density_scale, dt_last_full;
     double track_mismatch, t_compensation, t_compensated, density_sigma, density_dlog, predictor_h, predictor_t;
-    int track_at_end, density_stages, predictor_stages;
+    int track_at_end, density_stages, predictor_stages, track_restarted;
     struct pfvi_steady steady;
     size_t density_N, predictor_N, var_predictor_N;
     double (*stage_a)[PFVI_STAGES_MAX][3];
@@ -476,7 +476,7 @@ static struct contact_snapshot snapshot_of(const struct reb_simulation* r, const
         .density_scale = st->density_scale, .dt_last_full = st->dt_last_full, .track_mismatch = st->track_mismatch,
         .t_compensation = st->t_compensation, .t_compensated = st->t_compensated,
         .density_sigma = st->density_sigma, .density_dlog = st->density_dlog, .predictor_h = st->predictor_h,
-        .predictor_t = st->predictor_t, .track_at_end = st->track_at_end, .steady = st->steady,
+        .predictor_t = st->predictor_t, .track_at_end = st->track_at_end, .track_restarted = st->track_restarted, .steady = st->steady,
         .density_stages = st->density_stages,
         .predictor_stages = st->predictor_stages, .density_N = st->density_N, .predictor_N = st->predictor_N,
         .var_predictor_N = st->var_predictor_N,
@@ -493,7 +493,7 @@ static void snapshot_restore(struct reb_simulation* r, struct pfvi_state* st, co
     st->density_scale = k->density_scale; st->dt_last_full = k->dt_last_full; st->track_mismatch = k->track_mismatch;
     st->t_compensation = k->t_compensation; st->t_compensated = k->t_compensated;
     st->density_sigma = k->density_sigma; st->density_dlog = k->density_dlog; st->predictor_h = k->predictor_h;
-    st->predictor_t = k->predictor_t; st->track_at_end = k->track_at_end; st->steady = k->steady;
+    st->predictor_t = k->predictor_t; st->track_at_end = k->track_at_end; st->track_restarted = k->track_restarted; st->steady = k->steady;
     st->density_stages = k->density_stages;
     st->predictor_stages = k->predictor_stages; st->density_N = k->density_N; st->predictor_N = k->predictor_N;
     st->var_predictor_N = k->var_predictor_N;

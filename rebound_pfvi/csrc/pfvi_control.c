@@ -516,13 +516,14 @@ static struct track_position symmetric_position(const struct pfvi_state* st, dou
 static struct track_position symmetric_position_at(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
         double sign, double kappa, double sigma, double g){
     double start;
-    // A track dropped for an edit again right after one (a mass lost every
-    // step) starts at a grid point as before: each restart would anchor the
-    // grid at the edited orbit's last pericentre anew, and cross a part of
-    // an interval once an orbit where that moved (41 steps for the unedited
-    // run's 35; 36 so).
-    const int placed = !symmetric_on_track(st, kappa) && !(st->track_edited && st->track_edited_before)
-        && pericentre_start(r, st, N, kappa, sign, &start);
+    // Not after a close approach restarted the track (the state is inside
+    // or just past the encounter, where the leading orbit's curve says
+    // little: the retrograde crosser from 8 phases ended up to 7.1 and 3.1
+    // epsilon a n off at 1e-7 and 1e-8 with it, 2.5 and 0.62 without; the
+    // build before 7.1 and 3.3), nor for a second edit in a row (a mass lost
+    // every step: 37 steps for the unedited run's 35 with it, 36 without).
+    const int placed = !symmetric_on_track(st, kappa) && !st->track_restarted
+        && !(st->track_edited && st->track_edited_before) && pericentre_start(r, st, N, kappa, sign, &start);
     struct track_position t = symmetric_position(st, sign, kappa, sigma, g, placed ? &start : NULL);
     if (t.done > 0. && t.remaining > 0. && r->t + sign*t.remaining == r->t){
         st->track_at_end = 1;
@@ -1125,6 +1126,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     // it took beyond that was the track's own rounding).
     const double step = capped ? cap : fabs(h);
     const int full = (step == t.remaining);
+    st->track_restarted = restart;
     if (restart){
         st->rho = 0.;
         steady_forget(st);

@@ -188,9 +188,9 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "body's error ends within 3.4 times epsilon a n (a its orbit's size, n its orbits), mostly far below, on "
         "Kepler orbits of e = 0.5 ... 0.99, a comet passing Jupiter, a body crossing Jupiter's orbit, "
         "a sungrazer, a circumbinary planet, the outer solar system and a periodic box; over Kepler pairs "
-        "of e = 0.1 ... 0.95 from 8 phases, 100 orbits, within 1.3 times at the default and 4.7 at 1e-7, "
-        "the worst where an orbit takes close to a whole number of steps and the orbits' errors add up "
-        "(rebound_pfvi's docs, step control). Steps are kappa/rho with kappa = (epsilon/C_s)^(1/(2s - 2)) and rho "
+        "of e = 0.1 ... 0.95 from 8 phases, 100 orbits, within 0.53 times at the default and 0.9 at 1e-9 "
+        "... 3e-8, but 11.6 and 7.7 at 1e-7 and 1e-8 where an orbit takes within a few hundredths of a "
+        "whole number of steps and the orbits' errors add up (rebound_pfvi's docs, step control). Steps are kappa/rho with kappa = (epsilon/C_s)^(1/(2s - 2)) and rho "
         "following a density of the system's time scales (see step_control). Epsilon is held within "
         "what s stages deliver: above C_s " PFVI_STR(PFVI_KAPPA_MAX) "^(2s - 2) (s = 8: 1.2e-7, s = 6: 4.4e-5, "
         "s = 4: 0.019) kappa is at its cap of " PFVI_STR(PFVI_KAPPA_MAX) " (the stage solve converges "
@@ -327,6 +327,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "track_seen_lo", offsetof(struct pfvi_state, track_seen_lo), 0, 0, 0 },
     { "", REB_DOUBLE, "track_seen_hi", offsetof(struct pfvi_state, track_seen_hi), 0, 0, 0 },
     { "", REB_INT, "track_edited_before", offsetof(struct pfvi_state, track_edited_before), 0, 0, 0 },
+    { "", REB_INT, "track_restarted", offsetof(struct pfvi_state, track_restarted), 0, 0, 0 },
     { "", REB_INT, "steady_hold", offsetof(struct pfvi_state, steady.hold), 0, 0, 0 },
     { "", REB_INT, "steady_n", offsetof(struct pfvi_state, steady.n), 0, 0, 0 },
     { "", REB_DOUBLE, "steady_lo", offsetof(struct pfvi_state, steady.lo), 0, 0, 0 },
