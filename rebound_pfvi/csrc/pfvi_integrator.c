@@ -34,7 +34,7 @@ const struct reb_integrator pfvi_integrator = {
     "position error allowed per orbit, relative to the orbit: on the project's 13 comparison "
     "pages the default ends 5e2 to 2e6 times IAS15's default error (IAS15 epsilon 1e-9), at "
     "0.11-0.24 times its wall time. To compare with IAS15 at its default accuracy, set "
-    "sim.integrator.epsilon = 1e-12: within a factor 6.2 of IAS15's default error on all 13 "
+    "sim.integrator.epsilon = 1e-12: within a factor 14 of IAS15's default error on all 13 "
     "pages (5 at or below it), at 0.22-0.54 times its wall time. Every option and statistic is "
     "under Attributes below; the method follows.\n\n"
     "PFVI: phase-fitted discrete Lagrangian (variational) integrator of O. T. Kosmas and "
