@@ -514,7 +514,7 @@ static struct track_position symmetric_position(const struct pfvi_state* st, dou
 // interval is taken as ended there and the next one begins (without this
 // the run stopped: "the step dt = 5.55e-17 does not change t").
 static struct track_position symmetric_position_at(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
-        double sign, double kappa, double sigma, double g){
+        double t_at, double sign, double kappa, double sigma, double g){
     double start;
     // Not after a close approach restarted the track (the state is inside
     // or just past the encounter, where the leading orbit's curve says
@@ -525,7 +525,7 @@ static struct track_position symmetric_position_at(const struct reb_simulation* 
     const int placed = !symmetric_on_track(st, kappa) && !st->track_restarted
         && !(st->track_edited && st->track_edited_before) && pericentre_start(r, st, N, kappa, sign, &start);
     struct track_position t = symmetric_position(st, sign, kappa, sigma, g, placed ? &start : NULL);
-    if (t.done > 0. && t.remaining > 0. && r->t + sign*t.remaining == r->t){
+    if (t.done > 0. && t.remaining > 0. && t_at + sign*t.remaining == t_at){
         st->track_at_end = 1;
         t = symmetric_position(st, sign, kappa, sigma, g, NULL);
     }
@@ -904,7 +904,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         st->track_mismatch = 0.;  // a fresh track starts its average afresh
         st->track_seen_lo = st->track_seen_hi = t0;
     }
-    struct track_position t = symmetric_position_at(r, st, N, sign, kappa, sigma0, g0);
+    struct track_position t = symmetric_position_at(r, st, N, t0, sign, kappa, sigma0, g0);
     // An output time does not cap the step (pfvi_output.c shows it): the
     // step is the one sim.dt as the last step proposed it would give.
     const int output = st->output_uncapped;
@@ -966,7 +966,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
                     st->density_dlog = g1;
                     st->density_N = N;
                     st->density_stages = o->stages;
-                    r->dt = sign*symmetric_position_at(r, st, N, sign, kappa, sigma1, g1).remaining;
+                    r->dt = sign*symmetric_position_at(r, st, N, r->t, sign, kappa, sigma1, g1).remaining;
                     st->dt_proposed = r->dt;
                     return back;
                 }
@@ -1206,7 +1206,7 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     st->density_stages = o->stages;
     // Propose exactly the next step, so that REBOUND shortens it only to
     // finish on time; the next step recomputes it the same way.
-    r->dt = sign*symmetric_position_at(r, st, N, sign, kappa, sigma1, g1).remaining;
+    r->dt = sign*symmetric_position_at(r, st, N, r->t, sign, kappa, sigma1, g1).remaining;
     st->dt_proposed = r->dt;
     if (!shortened && !split && t.remaining <= cap){
         st->dt_last_full = h;
