@@ -137,11 +137,10 @@ def test_a_round_trip_across_splits_meets_every_logged_step():
     assert out[1] > 0   # (splits among them)
     sim.integrate(0.0)
     assert sim.integrator.n_rejected == out[1] and sim.integrator.n_asymmetric == out[2]
-    # The way back's grid meets the start within 1e-5 of a step (1e-6 of
-    # t here), on either side: from its near side one more step crosses it
-    # (to be shown at 0 by an output step). Measured over epsilon 1e-6 ...
-    # 1e-8 and T = 300, 410, 500: the build before the solve's early stop
-    # took that step in 6 of 15 round trips, this one in 14.
+    # The way back's grid meets the start within 1e-5 of a step (1e-6 of t
+    # here), on either side: from its near side one more step crosses it (to
+    # be shown at 0 by an output step). Measured over epsilon 1e-6 ... 1e-8
+    # and T = 300, 410, 500: that step was taken in 6 of 15 round trips.
     assert sim.integrator.n_steps - 2*out[0] in (0, 1)
     assert max(math.dist(a, p.xyz) for a, p in zip(start, sim.particles)) < 1e-9
 

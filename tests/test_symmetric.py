@@ -150,8 +150,7 @@ def test_a_step_into_a_close_approach_is_retried_shorter(s):
     # falls back (no retry) and the track's corrections: under a tenth.
     # None of them is halved by the stage solve (Newton's rounds). At s = 8
     # the close approaches take 3 or 6 retries (332 or 326 steps) depending
-    # on the last bits: over 12 starts 2^-44 apart, 6 in half of them, with
-    # the build before the solve's early stop as with this one.
+    # on the last bits: 6 from half of 12 starts 2^-44 apart (measured).
     assert 0 < sim.integrator.n_rejected <= 6
     assert sim.integrator.n_solve_halved == 0
     assert sim.integrator.n_rejected <= sim.integrator.n_asymmetric < 0.1 * sim.steps_done

@@ -131,11 +131,6 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // be taken; otherwise the rounds go on.
 #define PFVI_SOLVE_RESOLUTION 0x1p-52
 #define PFVI_SOLVE_CONFIRM 0x1p-48
-// A round after a correction of at most EARLY measures its own change:
-// Newton's next error, about the square of that correction, may be below
-// RESOLUTION already, and then the round's result is the step (one round
-// fewer: the round that would confirm it is not made).
-#define PFVI_SOLVE_EARLY 0x1p-24
 // Step control. Standard controller: next h = h * SAFETY * (epsilon/error)^(1/ORDER),
 // the factor kept within [SHRINK_MIN, GROW_MAX]; ORDER is the measured order
 // in h of the osculating-circle estimate (docs/adaptive.md).

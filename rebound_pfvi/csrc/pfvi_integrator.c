@@ -168,11 +168,9 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "(K&V, 'Increasing the algebraic order'). The stage equations are solved by rounds, each "
         "evaluating the forces at the stage points and corrected by Newton's method with each "
         "body's partner's tidal pull (mutual partners in their relative coordinate), from each "
-        "body's two-body orbit about its partner; they stop where a round moves the corrected "
-        "stages by no more than the doubles' resolution (that round's result is the step), or by "
-        "the measured rate of convergence with one confirming round (about 2 rounds on a pair or "
-        "a comet about its star, 3 to 4 in planetary systems at the defaults, of s - 2 force "
-        "evaluations, plus one at the step's end; s per round if forces depend on velocities), at most "
+        "body's two-body orbit about its partner; they stop by the measured rate of convergence, "
+        "with one confirming round (about 3 to 4 rounds of s - 2 force evaluations, plus one at "
+        "the step's end; s per round if forces depend on velocities), at most "
         PFVI_STR(PFVI_ITERATION_MAX) " rounds per step (rebound_pfvi's docs, the stage solve). "
         "Default " PFVI_STR(PFVI_STAGES_DEFAULT) ".",
         REB_INT, stages),

@@ -33,10 +33,7 @@
  * The residual G(y) - y of each round is the exact one: the partner model
  * changes only how fast the iterates converge, never what they converge to.
  *
- * The rounds stop where a round after a small correction moves the iterate
- * by no more than the doubles' resolution: that round's G(y), made from the
- * forces just evaluated, is the step (a pair, a comet about its star: two
- * rounds). Otherwise by the measured rate (pfvi_solve_verdict): with theta the
+ * The rounds stop by the measured rate (pfvi_solve_verdict): with theta the
  * ratio of the last two corrections, once theta/(1 - theta) times the last
  * correction is below the doubles' resolution, the corrected iterate is
  * taken through one final round, which must confirm it; a change that grows
@@ -890,26 +887,17 @@ static void solve_scales(struct pfvi_state* st, size_t N, const struct pfvi_fiel
     }
 }
 
-// The largest relative change of the real particles' unknowns (a NaN is
-// kept), or the first above limit where one is (the rest not measured).
-static double change_up_to(const struct pfvi_state* st, size_t N, double limit){
+// The largest relative change of the real particles' unknowns (a NaN is kept).
+static double change_of(const struct pfvi_state* st, size_t N){
     const int s = st->rule.s;
     double change = 0.;
     for (size_t i=0; i<N; i++){
         const double relative = pfvi_solve_change((const double (*)[3])st->unknowns[i],
                 (const double (*)[3])st->unknowns_next[i], st->stage_start[i].q0, st->solve_form[i]->increment, s,
                 st->solve_scale[i]);
-        if (!(relative <= limit)){
-            return relative;
-        }
-        change = (relative > change) ? relative : change;
+        change = (relative > change || relative != relative) ? relative : change;
     }
     return change;
-}
-
-// The largest relative change of the real particles' unknowns (a NaN is kept).
-static double change_of(const struct pfvi_state* st, size_t N){
-    return change_up_to(st, N, INFINITY);
 }
 
 enum pfvi_solve_next pfvi_solve_verdict(double change, double previous, int last_round){
@@ -984,26 +972,6 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
         if (residual == 0. || (final && residual <= PFVI_SOLVE_CONFIRM)){
             converged = 1;
             break;
-        }
-        // After a correction of at most PFVI_SOLVE_EARLY, Newton's next
-        // error (about its square) may be below the doubles' resolution: a
-        // round that moves the corrected iterate by no more than that has
-        // its result, made from the forces just evaluated, for the step (as
-        // an implicit Runge-Kutta method ends on its last stage values), and
-        // no round is made to confirm it. (The test stops at the first body
-        // above the resolution.) The variational particles keep their
-        // iterate and round, as after a confirming round: their own verdict
-        // follows (stages_advance).
-        if (newton && !final && previous <= PFVI_SOLVE_EARLY){
-            const double early = change_up_to(st, N, PFVI_SOLVE_RESOLUTION);
-            if (early <= PFVI_SOLVE_RESOLUTION){
-                double (*swap)[PFVI_STAGES_MAX-1][3] = st->unknowns;
-                st->unknowns = st->unknowns_next;
-                st->unknowns_next = swap;
-                residual = early;
-                converged = 1;
-                break;
-            }
         }
         if (!newton && !isfinite(residual)){
             break;
