@@ -4,17 +4,18 @@ apart that their round-off is independent), relative energy error at 10
 times (no step shortened to reach them); for each case the ensemble mean's
 largest excursion over the 10 samples in standard errors (unbiased
 round-off stays within about 2-3 of zero), the spread at the end, and the
-force evaluations per step. Written for the stage solve's early stop
-(docs/solve.md, "The stop rule"), which ends a step one round after a
-Newton correction instead of confirming it: a stop that keeps the same
-small error in every step biases the energy (docs/roundoff.md).
+force evaluations per step. A stop rule that keeps the same small error
+in every step biases the energy (docs/roundoff.md); the circular case
+("circ") is the one that showed it for the early stop tried on 2026-11-27
+(docs/performance.md, "Tried and dropped: the stage solve's early stop"),
+which the eccentric cases did not.
 
     python -P benchmarks/roundoff_bias.py [--cases fix201,fix50,...] [--members 8]
         [--baseline "PYTHONPATH=<another build> python3"]
 
 Each case runs in a child process of the interpreter given (default: this
-one), so --baseline puts another build's column beside this one's. About 3
-minutes for the six cases on one core.
+one), so --baseline puts another build's column beside this one's. About 5
+minutes for the seven cases on one core.
 """
 import argparse
 import json
@@ -30,12 +31,15 @@ CASES = {
     "s5e10": ("s = 5, epsilon 1e-10, e = 0.9", dict(e=0.9, orbits=1000, stages=5, epsilon=1e-10)),
     "s6e11": ("s = 6, epsilon 1e-11, e = 0.9", dict(e=0.9, orbits=1000, stages=6, epsilon=1e-11)),
     "e99": ("s = 8, epsilon 1e-12, e = 0.99", dict(e=0.99, orbits=1000, stages=8, epsilon=1e-12)),
+    "circ": ("s = 8, epsilon 1e-11, e = 0, 10^4 orbits, 16 members",
+             dict(e=0.0, orbits=10000, stages=8, epsilon=1e-11, members=16)),
 }
 
 CHILD = r"""
 import json, math, sys
 import rebound, rebound_pfvi
-case, members = json.loads(sys.argv[1]), int(sys.argv[2])
+case = json.loads(sys.argv[1])
+members = case.get("members", int(sys.argv[2]))
 runs, evaluations, steps = [], 0, 0
 for k in range(members):
     sim = rebound.Simulation()
@@ -73,7 +77,7 @@ def run(prefix, case, members):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--cases", default=",".join(CASES))
-    parser.add_argument("--members", type=int, default=8)
+    parser.add_argument("--members", type=int, default=8, help="members of each ensemble (circ: 16)")
     parser.add_argument("--baseline", default=None, help="a command prefix running another build of pfvi")
     args = parser.parse_args()
     builds = [("this build", [sys.executable])]

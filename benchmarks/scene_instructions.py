@@ -9,7 +9,8 @@ is the change's cost or gain at equal error.
 
 Prints, per scene and epsilon: instructions (millions), steps and force
 evaluations per step of each build, and the ratio this build / baseline,
-with the geometric mean of the ratios. Needs valgrind. About 3 minutes a
+with the geometric mean of the ratios (docs/performance.md: the early stop
+tried and dropped on 2026-11-27). Needs valgrind. About 3 minutes a
 build for the default eight scenes on one core.
 """
 import argparse
