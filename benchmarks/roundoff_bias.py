@@ -11,11 +11,11 @@ in every step biases the energy (docs/roundoff.md); the circular case
 which the eccentric cases did not.
 
     python -P benchmarks/roundoff_bias.py [--cases fix201,fix50,...] [--members 8]
-        [--baseline "PYTHONPATH=<another build> python3"]
+        [--baseline "PYTHONPATH=<another build> python3"] [--integrator ias15|whfast]
 
 Each case runs in a child process of the interpreter given (default: this
 one), so --baseline puts another build's column beside this one's. About 5
-minutes for the seven cases on one core.
+minutes for the first seven cases on one core (the default: all nine).
 """
 import argparse
 import json
@@ -33,6 +33,10 @@ CASES = {
     "e99": ("s = 8, epsilon 1e-12, e = 0.99", dict(e=0.99, orbits=1000, stages=8, epsilon=1e-12)),
     "circ": ("s = 8, epsilon 1e-11, e = 0, 10^4 orbits, 16 members at phases 0.3 k",
              dict(e=0.0, orbits=10000, stages=8, epsilon=1e-11, members=16)),
+    "circ-long": ("s = 8, epsilon 1e-11, e = 0, 3*10^4 orbits, 16 members at phases 0.3 k",
+                  dict(e=0.0, orbits=30000, stages=8, epsilon=1e-11, members=16)),
+    "circ-fixed": ("fixed steps P/25, e = 0, 3*10^4 orbits, 16 members at phases 0.3 k",
+                   dict(e=0.0, orbits=30000, per_orbit=25, members=16)),
 }
 
 CHILD = r"""
@@ -40,6 +44,7 @@ import json, math, sys
 import rebound, rebound_pfvi
 case = json.loads(sys.argv[1])
 members = case.get("members", int(sys.argv[2]))
+integrator = sys.argv[3]
 runs, evaluations, steps = [], 0, 0
 for k in range(members):
     sim = rebound.Simulation()
@@ -49,9 +54,13 @@ for k in range(members):
     # comes out too small)
     sim.add(m=1e-3, a=1.0 + k * 2.0**-40, e=case["e"], f=(0.3 * k if case["e"] == 0.0 else 0.0))
     sim.move_to_com()
-    sim.integrator = "pfvi"
+    sim.integrator = integrator
     period, energy0 = sim.particles[1].P, sim.energy()
-    if "per_orbit" in case:
+    if integrator == "whfast":
+        sim.dt = period / case.get("per_orbit", 25)
+    elif integrator != "pfvi":
+        pass   # (IAS15 and the like at their defaults)
+    elif "per_orbit" in case:
         sim.integrator.epsilon = 0.0
         sim.dt = period / case["per_orbit"]
     else:
@@ -62,8 +71,8 @@ for k in range(members):
         sim.integrate(case["orbits"] * period * j / 10, exact_finish_time=0)
         errors.append(sim.energy() / energy0 - 1.0)
     runs.append(errors)
-    evaluations += sim.integrator.n_force_evaluations
-    steps += sim.integrator.n_steps
+    steps += sim.integrator.n_steps if integrator == "pfvi" else sim.steps_done
+    evaluations += sim.integrator.n_force_evaluations if integrator == "pfvi" else 0
 means = [sum(r[j] for r in runs) / members for j in range(10)]
 spreads = [math.sqrt(sum((r[j] - means[j])**2 for r in runs) / (members - 1)) for j in range(10)]
 bias = max(abs(m) / (sd / math.sqrt(members)) for m, sd in zip(means, spreads))
@@ -71,8 +80,8 @@ print(json.dumps({"bias": bias, "spread": spreads[-1], "evaluations": evaluation
 """
 
 
-def run(prefix, case, members):
-    out = subprocess.run(["env"] + prefix + ["-P", "-c", CHILD, json.dumps(case), str(members)],
+def run(prefix, case, members, integrator):
+    out = subprocess.run(["env"] + prefix + ["-P", "-c", CHILD, json.dumps(case), str(members), integrator],
                          capture_output=True, text=True, check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -82,6 +91,8 @@ def main():
     parser.add_argument("--cases", default=",".join(CASES))
     parser.add_argument("--members", type=int, default=8, help="members of each ensemble (circ: 16)")
     parser.add_argument("--baseline", default=None, help="a command prefix running another build of pfvi")
+    parser.add_argument("--integrator", default="pfvi",
+                        help="pfvi (default), or REBOUND's ias15 (its defaults) or whfast (P/25) for comparison")
     args = parser.parse_args()
     builds = [("this build", [sys.executable])]
     if args.baseline:
@@ -92,7 +103,7 @@ def main():
         label, case = CASES[key]
         cells = []
         for _, prefix in builds:
-            r = run(prefix, case, args.members)
+            r = run(prefix, case, args.members, args.integrator)
             cells.append(f"{r['bias']:.1f}, {r['spread']:.1e}, {r['evaluations']:.1f}")
         print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
 
