@@ -15,7 +15,7 @@ which the eccentric cases did not.
 
 Each case runs in a child process of the interpreter given (default: this
 one), so --baseline puts another build's column beside this one's. About 5
-minutes for the first seven cases on one core (the default: all nine).
+minutes for the first seven cases on one core (the default: all eleven).
 """
 import argparse
 import json
@@ -37,6 +37,10 @@ CASES = {
                   dict(e=0.0, orbits=30000, stages=8, epsilon=1e-11, members=16)),
     "circ-fixed": ("fixed steps P/25, e = 0, 3*10^4 orbits, 16 members at phases 0.3 k",
                    dict(e=0.0, orbits=30000, per_orbit=25, members=16)),
+    "circ-fixed-s6": ("as circ-fixed at s = 6",
+                      dict(e=0.0, orbits=30000, per_orbit=25, members=16, stages=6)),
+    "circ-fixed-m6": ("as circ-fixed with m = 1e-6",
+                      dict(e=0.0, orbits=30000, per_orbit=25, members=16, m=1e-6)),
 }
 
 CHILD = r"""
@@ -52,7 +56,7 @@ for k in range(members):
     # (on a circular orbit each member starts at its own phase too: from one
     # phase the members' roundings stay alike and the mean's standard error
     # comes out too small)
-    sim.add(m=1e-3, a=1.0 + k * 2.0**-40, e=case["e"], f=(0.3 * k if case["e"] == 0.0 else 0.0))
+    sim.add(m=case.get("m", 1e-3), a=1.0 + k * 2.0**-40, e=case["e"], f=(0.3 * k if case["e"] == 0.0 else 0.0))
     sim.move_to_com()
     sim.integrator = integrator
     period, energy0 = sim.particles[1].P, sim.energy()
@@ -62,6 +66,7 @@ for k in range(members):
         pass   # (IAS15 and the like at their defaults)
     elif "per_orbit" in case:
         sim.integrator.epsilon = 0.0
+        sim.integrator.stages = case.get("stages", 8)
         sim.dt = period / case["per_orbit"]
     else:
         sim.integrator.stages = case["stages"]
