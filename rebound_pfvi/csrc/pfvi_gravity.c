@@ -38,14 +38,15 @@ int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st
 
 #define LANES PFVI_STAGES_MAX
 
-// The pair (i, j)'s terms in every lane, as REBOUND's loop body; with
+// The pair (i, j)'s terms in lanes l0 .. l1 - 1 (constants at each call), as REBOUND's loop body; with
 // pull_j = 0 (a test particle i of type 0) j feels nothing. The lanes are
 // independent, so the compiler vectorises them (SSE2's packed square root
 // and division round as the scalar ones do: the same bits).
 static inline __attribute__((always_inline)) void pair_terms(const double (*restrict xi)[LANES],
         const double (*restrict xj)[LANES], double (*restrict ai)[LANES], double (*restrict aj)[LANES],
-        double mi, double mj, double G, double softening2, const double g[3], int pull_j){
-    for (int l=0; l<LANES; l++){
+        double mi, double mj, double G, double softening2, const double g[3], int pull_j,
+        const int l0, const int l1){
+    for (int l=l0; l<l1; l++){
         const double dx = (g[0] + xi[0][l]) - xj[0][l];
         const double dy = (g[1] + xi[1][l]) - xj[1][l];
         const double dz = (g[2] + xi[2][l]) - xj[2][l];
@@ -60,6 +61,28 @@ static inline __attribute__((always_inline)) void pair_terms(const double (*rest
             aj[0][l] += prefacti*dx;
             aj[1][l] += prefacti*dy;
             aj[2][l] += prefacti*dz;
+        }
+    }
+}
+
+// Every pair's terms in lanes l0 .. l1 - 1 (constants at each call: each
+// its own vectorised loop).
+static inline __attribute__((always_inline)) void all_pairs(const struct reb_particle* ps, size_t N,
+        size_t N_active, int pull, const double (*restrict X)[3][LANES], double (*restrict A)[3][LANES],
+        double G, double softening2, const double g[3], const int l0, const int l1){
+    for (size_t i=1; i<N_active; i++){
+        for (size_t j=0; j<i; j++){
+            pair_terms(X[i], X[j], A[i], A[j], ps[i].m, ps[j].m, G, softening2, g, 1, l0, l1);
+        }
+    }
+    const size_t first_test = (N_active > 1) ? N_active : 1;
+    for (size_t i=first_test; i<N; i++){
+        for (size_t j=0; j<N_active; j++){
+            if (pull){
+                pair_terms(X[i], X[j], A[i], A[j], ps[i].m, ps[j].m, G, softening2, g, 1, l0, l1);
+            }else{
+                pair_terms(X[i], X[j], A[i], A[j], ps[i].m, ps[j].m, G, softening2, g, 0, l0, l1);
+            }
         }
     }
 }
@@ -101,21 +124,16 @@ int pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, s
             memcpy(&A[i][c][4], &zero, sizeof(zero));
         }
     }
-    for (size_t i=1; i<N_active; i++){
-        for (size_t j=0; j<i; j++){
-            pair_terms(X[i], X[j], A[i], A[j], ps[i].m, ps[j].m, G, softening2, g, 1);
-        }
-    }
-    const size_t first_test = (N_active > 1) ? N_active : 1;
+    // Stages within one block of 4 lanes (the end stage's pass alone; s <= 5)
+    // take that block alone.
     const int pull = r->testparticle_type;
-    for (size_t i=first_test; i<N; i++){
-        for (size_t j=0; j<N_active; j++){
-            if (pull){
-                pair_terms(X[i], X[j], A[i], A[j], ps[i].m, ps[j].m, G, softening2, g, 1);
-            }else{
-                pair_terms(X[i], X[j], A[i], A[j], ps[i].m, ps[j].m, G, softening2, g, 0);
-            }
-        }
+    const double (*const Xc)[3][LANES] = (const double (*)[3][LANES])X;
+    if (k1 < 4){
+        all_pairs(ps, N, N_active, pull, Xc, A, G, softening2, g, 0, 4);
+    }else if (k0 >= 4){
+        all_pairs(ps, N, N_active, pull, Xc, A, G, softening2, g, 4, LANES);
+    }else{
+        all_pairs(ps, N, N_active, pull, Xc, A, G, softening2, g, 0, LANES);
     }
     // Whether every force is finite, as the caller's check of REBOUND's
     // accelerations asks: a - a is 0 for a finite a and NaN otherwise, and a
