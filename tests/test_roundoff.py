@@ -85,7 +85,7 @@ def test_symmetric_steps_return_over_ten_thousand_steps(s):
     assert sim.integrator.n_asymmetric == 0
 
 
-def ensemble(e, orbits, members, phases=False, **options):
+def ensemble(e, orbits, members, phases=False, a=1.0, per_orbit=None, **options):
     """Relative energy errors of `members` runs whose semi-major axes differ
     by k 2^-40 (about 1e-12: far below what the truncation error feels, far
     enough apart that their round-off is independent), at 10 times (no step
@@ -94,19 +94,23 @@ def ensemble(e, orbits, members, phases=False, **options):
     point in doubles: their round-off walks stay together for hundreds of
     orbits (16 such members at e = 0.9, epsilon 1e-12: the ensemble mean
     reached 4.6 of its standard errors by 800 orbits and then stayed put,
-    while members 2^-40 apart stay within 1.3)."""
+    while members 2^-40 apart stay within 1.3). per_orbit: fixed steps of
+    that fraction of the period."""
     runs = []
     for k in range(members):
         sim = rebound.Simulation()
         sim.add(m=1.0)
         # (phases: each member from its own phase, as a circular orbit needs:
         # from one phase its members' roundings stay alike)
-        sim.add(m=1e-3, a=1.0 + k * 2.0**-40, e=e, f=0.3 * k if phases else 0.0)
+        sim.add(m=1e-3, a=a * (1.0 + k * 2.0**-40), e=e, f=0.3 * k if phases else 0.0)
         sim.move_to_com()
         sim.integrator = "pfvi"
         for name, value in options.items():
             setattr(sim.integrator, name, value)
         period, energy0 = sim.particles[1].P, sim.energy()
+        if per_orbit:
+            sim.integrator.epsilon = 0.0
+            sim.dt = period / per_orbit
         errors = []
         for j in range(1, 11):
             sim.integrate(orbits * period * j / 10, exact_finish_time=0)
@@ -141,11 +145,24 @@ def test_a_circular_orbits_round_off_keeps_no_large_bias():
     # stage solve's early stop tried on 2026-11-27 (docs/performance.md)
     # drove this ensemble (12 members at their own phases, e = 0, epsilon
     # 1e-11, 3000 orbits) to 35 standard errors, linearly, where eccentric
-    # ensembles stayed within 2.1. This build measured at most 3.4 here; it
-    # has a small bias of its own on circular orbits (docs/roundoff.md: 4.5
-    # over 10^4 orbits with 16 members), hence the bound of 8.
+    # ensembles stayed within 2.1. This build measured 1.15 here; the build
+    # before, whose step ended on the Newton iterate's own end increment
+    # (test below), 3.4.
     bias, slope = ensemble(0.0, 3000, 12, phases=True, epsilon=1e-11)
-    assert bias < 8.0
+    assert bias < 4.0
+
+
+def test_a_circular_orbit_with_fixed_steps_keeps_no_bias():
+    # The bias circular orbits showed until 2026-11-27 (docs/roundoff.md):
+    # the step ended on the Newton iterate's own end increment, which keeps
+    # the rest of its last correction below the doubles' last place, the same
+    # in every step of a circular orbit; the energy fell linearly. Now the end
+    # is the IIIA-IIIB update from the stages' forces, carried in two parts.
+    # This ensemble (16 members at their own phases, a = 0.7, fixed steps of
+    # P/25, 9000 orbits) measured 1.6 standard errors; the build before 6.5
+    # (11 after 3e4 orbits).
+    bias, _ = ensemble(0.0, 9000, 16, phases=True, a=0.7, per_orbit=25)
+    assert bias < 4.0
 
 
 def test_at_the_defaults_the_round_off_spread_grows_like_a_random_walk():

@@ -1081,6 +1081,7 @@ struct pfvi_state {
     struct reb_vec3d* v_rotated;   // velocities before the final kick (velocity-dependent forces)
     struct pfvi_written* written;  // what pfvi set before a force evaluation (a callback may not edit it)
     struct reb_vec3d* dx;          // position increment of the step, with the carried low-order part
+    double (*end_low)[3];          // the s-point step's end increment's low part (solve_take_end): this trial's
     struct reb_vec3d* dv;          // velocity increment of the step, with the carried low-order part
     // Compensated summation: the low-order parts of x, y, z, vx, vy, vz that
     // the particles' doubles lost (Kahan). Saved in archives, so a continued

@@ -931,6 +931,76 @@ void pfvi_solve_swap(struct pfvi_state* st){
     st->var_unknowns_next = swap;
 }
 
+// The converged solve's end increment, for the classical form: the
+// IIIA-IIIB update itself, h v_k + h sum_j (1 - c_j) hb_j A^j, from the
+// forces at the stage points of y, the iterate whose forces the last round
+// evaluated, rounded once. y's own end y[s-2] is a Newton correction's
+// result: where that correction fell below the doubles' last place it was
+// rounded away, and what it left is the same in every step of a steady orbit
+// (the partner model's error on the iterate before), so taking it biased the
+// energy (docs/roundoff.md: a circular orbit's fell by 1e-19 a step, 11
+// standard errors of an ensemble over 3e4 orbits). The round's own G(y) has
+// no such rest but three roundings of terms larger than the increment (h v_k
+// and h times the sum); here h v_k and h sum are exact pairs, so that the
+// increment is the update rounded once, and what that rounding loses joins
+// the position's carried low-order part (end_low, then the compensation of
+// the step taken). The interior stages stay y's (measured: taking G(y)'s
+// for them alone left the bias; for them too, with their forces carried by
+// the partners' tidal tensors, removed it no better). 1 if some body's end
+// moved: its force is then evaluated at the new end. (The three components
+// are the lanes of one vector, the fourth a copy of z, never stored; each
+// lane is the scalar operation, so every build gives the same bits; the
+// products are split as Dekker's, with no fused multiply-add.)
+PFVI_VECTOR_CLONES
+static int solve_take_end(struct pfvi_state* st, size_t N, double h){
+    const int s = st->rule.s;
+    const struct pfvi_lobatto* const rule = &st->rule;
+    double hb_nu[PFVI_STAGES_MAX];   // hb_j and the update's weight (1 - c_j) of row s - 1
+    for (int j=0; j<s-1; j++){
+        hb_nu[j] = h*rule->w[j];
+    }
+    const double split = 134217729.;   // 2^27 + 1
+    const double ch = split*h, h_hi = ch - (ch - h), h_lo = h - h_hi;
+    const pfvi_lanes H = {h, h, h, h}, H_hi = {h_hi, h_hi, h_hi, h_hi}, H_lo = {h_lo, h_lo, h_lo, h_lo};
+    const pfvi_lanes SPLIT = {split, split, split, split};
+    int moved = 0;
+    for (size_t i=0; i<N; i++){
+        if (!st->stage_fit[i].classical){
+            continue;
+        }
+        const double (*const a)[3] = (const double (*)[3])st->stage_a[i];
+        pfvi_lanes sum = {0., 0., 0., 0.};   // (row s - 1 of the round's sums, in its order)
+        for (int j=0; j<s-1; j++){
+            const double nu = rule->nu[s-1][j], hb = hb_nu[j];
+            const pfvi_lanes A = {a[j][0], a[j][1], a[j][2], a[j][2]};
+            sum += (pfvi_lanes){nu, nu, nu, nu}*((pfvi_lanes){hb, hb, hb, hb}*A);
+        }
+        const double* const v = st->stage_start[i].v0;
+        const pfvi_lanes V = {v[0], v[1], v[2], v[2]};
+        // h v = hv + hv_lo and h sum = hs + hs_lo exactly (Dekker's product)
+        const pfvi_lanes cv = SPLIT*V, v_hi = cv - (cv - V), v_lo = V - v_hi;
+        const pfvi_lanes hv = H*V;
+        const pfvi_lanes hv_lo = ((H_hi*v_hi - hv) + H_hi*v_lo + H_lo*v_hi) + H_lo*v_lo;
+        const pfvi_lanes cs = SPLIT*sum, s_hi = cs - (cs - sum), s_lo = sum - s_hi;
+        const pfvi_lanes hs = H*sum;
+        const pfvi_lanes hs_lo = ((H_hi*s_hi - hs) + H_hi*s_lo + H_lo*s_hi) + H_lo*s_lo;
+        // hv + hs = total + total_lo exactly (Knuth's sum)
+        const pfvi_lanes total = hv + hs, bb = total - hv;
+        const pfvi_lanes total_lo = (hv - (total - bb)) + (hs - bb);
+        const pfvi_lanes low = total_lo + (hv_lo + hs_lo);
+        const pfvi_lanes update = total + low;
+        const pfvi_lanes rest = (total - update) + low;
+        double u[4], r[4];
+        memcpy(u, &update, sizeof(u));
+        memcpy(r, &rest, sizeof(r));
+        double* const end = st->unknowns[i][s-2];
+        moved |= (u[0] != end[0]) | (u[1] != end[1]) | (u[2] != end[2]);
+        end[0] = u[0]; end[1] = u[1]; end[2] = u[2];
+        st->end_low[i][0] = r[0]; st->end_low[i][1] = r[1]; st->end_low[i][2] = r[2];
+    }
+    return moved;
+}
+
 enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
         const struct pfvi_solve_ops* ops, int predicted){
     const int s = st->rule.s;
@@ -945,6 +1015,9 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
     for (size_t i=0; end_free && i<N; i++){
         end_free = (st->solve_form[i]->k_last < s - 1);
     }
+    for (size_t i=0; i<N; i++){
+        st->end_low[i][0] = st->end_low[i][1] = st->end_low[i][2] = 0.;
+    }
     newton_order(st, N, &field);
     solve_scales(st, N, &field);
     if (predicted != PFVI_PREDICTED_RETRY){
@@ -958,7 +1031,8 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
     int rounds = 0, final = 0, newton = 1, diverged = 0, converged = 0, end_evaluated = 0;
     double previous = INFINITY, change = INFINITY, residual = INFINITY;
     for (;;){
-        const int k_last = (end_free && !final) ? s - 2 : s - 1;
+                // (an end free of its step is evaluated once, after: solve_take_end)
+        const int k_last = end_free ? s - 2 : s - 1;
         if (!ops->forces(r, st, N, t0, h, 1, k_last)){
             return PFVI_TRIAL_ERROR;
         }
@@ -1022,6 +1096,11 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
     }
     st->trial.rounds = (uint64_t)rounds;
     st->trial.change = isnan(residual) ? change : residual;  // (what the last round measured)
+    // The end is G(y)'s where the end's force enters no stage (the classical
+    // form): solve_take_end.
+    if (converged && end_free && solve_take_end(st, N, h)){
+        end_evaluated = 0;
+    }
     if (converged && !end_evaluated && !ops->forces(r, st, N, t0, h, s - 1, s - 1)){
         return PFVI_TRIAL_ERROR;
     }

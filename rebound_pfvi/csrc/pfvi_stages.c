@@ -193,14 +193,15 @@ static inline double stage_increment(const struct pfvi_stage_fit* f, const struc
 
 // Stage point k of one particle: q_k + (beta_m d_k + bbar (d_k+1 - d_k)
 // + delta q^k + the centre's drift). The last stage is q_k + (increment +
-// carried low-order part), exactly the position the step will end on.
+// carried low-order part, with the increment's own low part: low, or NULL),
+// exactly the position the step will end on.
 static inline void stage_position(const struct pfvi_stage_fit* f, const struct pfvi_stage_start* ss,
-        const struct pfvi_compensation* comp, const double (*y)[3], int s, int k, double x[3]){
+        const struct pfvi_compensation* comp, const double* low, const double (*y)[3], int s, int k, double x[3]){
     for (int c=0; c<3; c++){
         if (k == 0){
             x[c] = ss->q0[c];
         }else if (k == s - 1){
-            x[c] = ss->q0[c] + (stage_increment(f, ss, y, s, c) + comp->x[c]);
+            x[c] = ss->q0[c] + (stage_increment(f, ss, y, s, c) + (comp->x[c] + (low ? low[c] : 0.)));
         }else if (f->classical){
             x[c] = ss->q0[c] + y[k-1][c];
         }else{
@@ -243,14 +244,16 @@ static int stage_forces_own(struct reb_simulation* r, struct pfvi_state* st, siz
                 st->stage_x[i][k][2] = q0[2] + y[k-1][2];
             }
             if (k_last == s - 1){
+                const double* const low = st->end_low[i];
                 for (int c=0; c<3; c++){
-                    st->stage_x[i][s-1][c] = q0[c] + (y[s-2][c] + comp[c]);
+                    st->stage_x[i][s-1][c] = q0[c] + (y[s-2][c] + (comp[c] + low[c]));
                 }
             }
             continue;
         }
         for (int k=k_first; k<=k_last; k++){
-            stage_position(&st->stage_fit[i], &st->stage_start[i], &st->compensation[i], y, s, k, st->stage_x[i][k]);
+            stage_position(&st->stage_fit[i], &st->stage_start[i], &st->compensation[i], st->end_low[i], y, s, k,
+                    st->stage_x[i][k]);
         }
     }
     // (finite: pfvi_update_acceleration's check, made in the gravity's lanes)
@@ -305,14 +308,14 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
     for (int k=(vdep && k_first <= 1) ? 0 : k_first; k<=k_last; k++){
         for (size_t v=0; v<nv; v++){
             double x[3];
-            stage_position(&st->stage_fit[st->var_real[v]], &st->var_stage_start[v], &var_compensation,
+            stage_position(&st->stage_fit[st->var_real[v]], &st->var_stage_start[v], &var_compensation, NULL,
                     (const double (*)[3])st->var_unknowns[v], s, k, x);
             pv[v].x = x[0]; pv[v].y = x[1]; pv[v].z = x[2];
         }
         for (size_t i=0; i<N; i++){
             double x[3];
             const struct pfvi_centre* const centre = &st->centre[i];
-            stage_position(&st->stage_fit[i], &st->stage_start[i], &st->compensation[i],
+            stage_position(&st->stage_fit[i], &st->stage_start[i], &st->compensation[i], st->end_low[i],
                     (const double (*)[3])st->unknowns[i], s, k, x);
             ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
             if (vdep && st->stage_fit[i].classical){
@@ -775,7 +778,7 @@ static int stages_advance_variational(struct reb_simulation* r, struct pfvi_stat
     }
     for (size_t v=0; v<nv; v++){
         double x[3];
-        stage_position(&st->stage_fit[st->var_real[v]], &st->var_stage_start[v], &var_compensation,
+        stage_position(&st->stage_fit[st->var_real[v]], &st->var_stage_start[v], &var_compensation, NULL,
                 (const double (*)[3])st->var_unknowns[v], s, s - 1, x);
         pv[v].x = x[0]; pv[v].y = x[1]; pv[v].z = x[2];
         pv[v].vx = st->var_dv[v].x; pv[v].vy = st->var_dv[v].y; pv[v].vz = st->var_dv[v].z;
@@ -827,7 +830,7 @@ static void stage_solve_positions(struct pfvi_state* st, size_t N, double h){
     const int s = st->rule.s;
     for (size_t i=0; i<N; i++){
         for (int k=1; k<s; k++){
-            stage_position(&st->stage_fit[i], &st->stage_start[i], &st->compensation[i],
+            stage_position(&st->stage_fit[i], &st->stage_start[i], &st->compensation[i], st->end_low[i],
                     (const double (*)[3])st->unknowns[i], s, k, st->solve_x[i][k]);
         }
     }
@@ -923,7 +926,7 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
         struct pfvi_compensation* const comp = &st->compensation[i];
         const double (*y)[3] = st->unknowns[i];
         double x[3], inc_v[3];
-        stage_position(f, &st->stage_start[i], comp, y, s, s - 1, x);
+        stage_position(f, &st->stage_start[i], comp, st->end_low[i], y, s, s - 1, x);
         if (f->classical){
             // p_k+1 = p_k + sum_j hb_j A^j (IIIB).
             for (int c=0; c<3; c++){
@@ -989,9 +992,10 @@ static void stages_commit(struct reb_simulation* r, struct pfvi_state* st, size_
         const struct pfvi_stage_start* const ss = &st->stage_start[i];
         const int s = st->rule.s;
         const struct pfvi_stage_fit* const f = &st->stage_fit[i];
-        comp->x[0] = (stage_increment(f, ss, y, s, 0) + comp->x[0]) - (ps[i].x - p0[i].x);
-        comp->x[1] = (stage_increment(f, ss, y, s, 1) + comp->x[1]) - (ps[i].y - p0[i].y);
-        comp->x[2] = (stage_increment(f, ss, y, s, 2) + comp->x[2]) - (ps[i].z - p0[i].z);
+        const double* const low = st->end_low[i];
+        comp->x[0] = (stage_increment(f, ss, y, s, 0) + (comp->x[0] + low[0])) - (ps[i].x - p0[i].x);
+        comp->x[1] = (stage_increment(f, ss, y, s, 1) + (comp->x[1] + low[1])) - (ps[i].y - p0[i].y);
+        comp->x[2] = (stage_increment(f, ss, y, s, 2) + (comp->x[2] + low[2])) - (ps[i].z - p0[i].z);
         comp->v[0] = st->dv[i].x - (ps[i].vx - p0[i].vx);
         comp->v[1] = st->dv[i].y - (ps[i].vy - p0[i].vy);
         comp->v[2] = st->dv[i].z - (ps[i].vz - p0[i].vz);

@@ -25,6 +25,7 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->v_rotated);
     free(st->written);
     free(st->dx);
+    free(st->end_low);
     free(st->dv);
     free(st->compensation);
     free(st->stage_fit);
@@ -118,6 +119,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->v_rotated = pfvi_grow(st->v_rotated, N*sizeof(*st->v_rotated), &ok);
     st->written = pfvi_grow(st->written, N*sizeof(*st->written), &ok);
     st->dx = pfvi_grow(st->dx, N*sizeof(*st->dx), &ok);
+    st->end_low = pfvi_grow(st->end_low, N*sizeof(*st->end_low), &ok);
     st->dv = pfvi_grow(st->dv, N*sizeof(*st->dv), &ok);
     st->stage_fit = pfvi_grow(st->stage_fit, N*sizeof(*st->stage_fit), &ok);
     st->stage_fit_classical = pfvi_grow(st->stage_fit_classical, N*sizeof(*st->stage_fit_classical), &ok);
