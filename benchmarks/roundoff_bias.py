@@ -2,7 +2,7 @@
 differ by k 2^-40 (far below what the truncation error feels, far enough
 apart that their round-off is independent), relative energy error at 10
 times (no step shortened to reach them); for each case the ensemble mean's
-largest excursion over the 10 samples in standard errors (unbiased
+largest excursion over the 10 samples in standard errors, signed (unbiased
 round-off stays within about 2-3 of zero), the spread at the end, and the
 force evaluations per step. A stop rule that keeps the same small error
 in every step biases the energy (docs/roundoff.md); the circular case
@@ -11,7 +11,8 @@ in every step biases the energy (docs/roundoff.md); the circular case
 which the eccentric cases did not.
 
     python -P benchmarks/roundoff_bias.py [--cases fix201,fix50,...] [--members 8]
-        [--baseline "PYTHONPATH=<another build> python3"] [--integrator ias15|whfast]
+        [--set a=0.7,per_orbit=50] [--baseline "PYTHONPATH=<another build> python3"]
+        [--integrator ias15|whfast]
 
 Each case runs in a child process of the interpreter given (default: this
 one), so --baseline puts another build's column beside this one's. About 5
@@ -56,7 +57,8 @@ for k in range(members):
     # (on a circular orbit each member starts at its own phase too: from one
     # phase the members' roundings stay alike and the mean's standard error
     # comes out too small)
-    sim.add(m=case.get("m", 1e-3), a=1.0 + k * 2.0**-40, e=case["e"], f=(0.3 * k if case["e"] == 0.0 else 0.0))
+    sim.add(m=case.get("m", 1e-3), a=case.get("a", 1.0) * (1.0 + k * 2.0**-40), e=case["e"],
+            f=(0.3 * k if case["e"] == 0.0 else 0.0))
     sim.move_to_com()
     sim.integrator = integrator
     period, energy0 = sim.particles[1].P, sim.energy()
@@ -80,7 +82,8 @@ for k in range(members):
     evaluations += sim.integrator.n_force_evaluations if integrator == "pfvi" else 0
 means = [sum(r[j] for r in runs) / members for j in range(10)]
 spreads = [math.sqrt(sum((r[j] - means[j])**2 for r in runs) / (members - 1)) for j in range(10)]
-bias = max(abs(m) / (sd / math.sqrt(members)) for m, sd in zip(means, spreads))
+# (signed: the sample farthest from zero in standard errors)
+bias = max((m / (sd / math.sqrt(members)) for m, sd in zip(means, spreads)), key=abs)
 print(json.dumps({"bias": bias, "spread": spreads[-1], "evaluations": evaluations / steps}))
 """
 
@@ -96,6 +99,9 @@ def main():
     parser.add_argument("--cases", default=",".join(CASES))
     parser.add_argument("--members", type=int, default=8, help="members of each ensemble (circ: 16)")
     parser.add_argument("--baseline", default=None, help="a command prefix running another build of pfvi")
+    parser.add_argument("--set", default="", metavar="KEY=VALUE,...",
+                        help="override every case's parameters, e.g. a=0.7,per_orbit=50 (m, a, e, orbits, "
+                             "per_orbit, stages, epsilon, members)")
     parser.add_argument("--integrator", default="pfvi",
                         help="pfvi (default), or REBOUND's ias15 (its defaults) or whfast (P/25) for comparison")
     args = parser.parse_args()
@@ -106,6 +112,12 @@ def main():
     print("|---|" + "---|" * len(builds))
     for key in args.cases.split(","):
         label, case = CASES[key]
+        if args.set:
+            case = dict(case)
+            for item in args.set.split(","):
+                name, value = item.split("=")
+                case[name] = int(value) if name in ("members", "stages") else float(value)
+            label += f" ({args.set})"
         cells = []
         for _, prefix in builds:
             r = run(prefix, case, args.members, args.integrator)
