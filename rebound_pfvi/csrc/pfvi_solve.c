@@ -946,24 +946,23 @@ void pfvi_solve_swap(struct pfvi_state* st){
 // the position's carried low-order part (end_low, then the compensation of
 // the step taken). The interior stages stay y's (measured: taking G(y)'s
 // for them alone left the bias; for them too, with their forces carried by
-// the partners' tidal tensors, removed it no better). 1 if some body's end
-// moved: its force is then evaluated at the new end. (The three components
+// the partners' tidal tensors, removed it no better). The end's force is
+// evaluated after, at the new end (no round evaluated it). (The three components
 // are the lanes of one vector, the fourth a copy of z, never stored; each
 // lane is the scalar operation, so every build gives the same bits; the
 // products are split as Dekker's, with no fused multiply-add.)
 PFVI_VECTOR_CLONES
-static int solve_take_end(struct pfvi_state* st, size_t N, double h){
+static void solve_take_end(struct pfvi_state* st, size_t N, double h){
     const int s = st->rule.s;
     const struct pfvi_lobatto* const rule = &st->rule;
-    double hb_nu[PFVI_STAGES_MAX];   // hb_j and the update's weight (1 - c_j) of row s - 1
+    double hb[PFVI_STAGES_MAX];   // h w_j, as the rounds form it
     for (int j=0; j<s-1; j++){
-        hb_nu[j] = h*rule->w[j];
+        hb[j] = h*rule->w[j];
     }
     const double split = 134217729.;   // 2^27 + 1
     const double ch = split*h, h_hi = ch - (ch - h), h_lo = h - h_hi;
     const pfvi_lanes H = {h, h, h, h}, H_hi = {h_hi, h_hi, h_hi, h_hi}, H_lo = {h_lo, h_lo, h_lo, h_lo};
     const pfvi_lanes SPLIT = {split, split, split, split};
-    int moved = 0;
     for (size_t i=0; i<N; i++){
         if (!st->stage_fit[i].classical){
             continue;
@@ -971,9 +970,9 @@ static int solve_take_end(struct pfvi_state* st, size_t N, double h){
         const double (*const a)[3] = (const double (*)[3])st->stage_a[i];
         pfvi_lanes sum = {0., 0., 0., 0.};   // (row s - 1 of the round's sums, in its order)
         for (int j=0; j<s-1; j++){
-            const double nu = rule->nu[s-1][j], hb = hb_nu[j];
+            const double nu = rule->nu[s-1][j], hbj = hb[j];
             const pfvi_lanes A = {a[j][0], a[j][1], a[j][2], a[j][2]};
-            sum += (pfvi_lanes){nu, nu, nu, nu}*((pfvi_lanes){hb, hb, hb, hb}*A);
+            sum += (pfvi_lanes){nu, nu, nu, nu}*((pfvi_lanes){hbj, hbj, hbj, hbj}*A);
         }
         const double* const v = st->stage_start[i].v0;
         const pfvi_lanes V = {v[0], v[1], v[2], v[2]};
@@ -994,11 +993,9 @@ static int solve_take_end(struct pfvi_state* st, size_t N, double h){
         memcpy(u, &update, sizeof(u));
         memcpy(r, &rest, sizeof(r));
         double* const end = st->unknowns[i][s-2];
-        moved |= (u[0] != end[0]) | (u[1] != end[1]) | (u[2] != end[2]);
         end[0] = u[0]; end[1] = u[1]; end[2] = u[2];
         st->end_low[i][0] = r[0]; st->end_low[i][1] = r[1]; st->end_low[i][2] = r[2];
     }
-    return moved;
 }
 
 enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
@@ -1031,7 +1028,7 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
     int rounds = 0, final = 0, newton = 1, diverged = 0, converged = 0, end_evaluated = 0;
     double previous = INFINITY, change = INFINITY, residual = INFINITY;
     for (;;){
-                // (an end free of its step is evaluated once, after: solve_take_end)
+        // (an end free of its step is evaluated once, after: solve_take_end)
         const int k_last = end_free ? s - 2 : s - 1;
         if (!ops->forces(r, st, N, t0, h, 1, k_last)){
             return PFVI_TRIAL_ERROR;
@@ -1096,10 +1093,10 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
     }
     st->trial.rounds = (uint64_t)rounds;
     st->trial.change = isnan(residual) ? change : residual;  // (what the last round measured)
-    // The end is G(y)'s where the end's force enters no stage (the classical
-    // form): solve_take_end.
-    if (converged && end_free && solve_take_end(st, N, h)){
-        end_evaluated = 0;
+    // Where the end's force enters no stage (the classical form) the end is
+    // the update's (solve_take_end), and no round has evaluated its force.
+    if (converged && end_free){
+        solve_take_end(st, N, h);
     }
     if (converged && !end_evaluated && !ops->forces(r, st, N, t0, h, s - 1, s - 1)){
         return PFVI_TRIAL_ERROR;
