@@ -1570,6 +1570,14 @@ PFVI_INTERNAL int pfvi_output_eligible(const struct reb_simulation* r, const str
 PFVI_INTERNAL int pfvi_output_is_shown(const struct reb_simulation* r, const struct pfvi_state* st);
 // Puts the run's own state (output_real, output_t_real) into the simulation.
 PFVI_INTERNAL void pfvi_output_take_up(struct reb_simulation* r, struct pfvi_state* st);
+// REBOUND's periodic wrap of the state in the simulation (reb_boundary_check,
+// which REBOUND applies after every step), where it would have met the run's
+// own end kept behind an output; 1 if it moved a particle.
+PFVI_INTERNAL int pfvi_output_boundary(struct reb_simulation* r);
+// Where the simulation is the run's last step's end moved by REBOUND's
+// periodic wrap, puts the end's positions back and returns 1; else 0, the
+// simulation as it was.
+PFVI_INTERNAL int pfvi_output_unwrap(struct reb_simulation* r, struct pfvi_state* st);
 // Whether the forces still are those the run's step past the shown output
 // was made with: where they include what pfvi cannot see into (a callback's
 // own variables, REBOUNDx's forces and parameters, custom gravity), one

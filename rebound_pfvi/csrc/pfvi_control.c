@@ -768,7 +768,10 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
         double sign, const struct pfvi_symmetric_constants* constants){
     const int s = st->options.stages;
     const double u_aim = PFVI_UNPAIRED_AIM*constants->kappa;
-    double h = fabs(r->dt), u = 0., u_last = INFINITY;
+    // An output time does not cap the step (pfvi_output.c shows it), as on
+    // the symmetric track: the step is the one this run proposed.
+    const int output = st->output_uncapped && st->dt_proposed != 0.;
+    double h = output ? fabs(st->dt_proposed) : fabs(r->dt), u = 0., u_last = INFINITY;
     if (!(st->dt_proposed != 0. && h == fabs(st->dt_proposed))){
         // A step this run did not propose (the first, the user's, REBOUND's
         // restored last step) is at most the shortest |v|/|a| of a moving

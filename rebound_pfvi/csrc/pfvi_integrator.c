@@ -246,7 +246,9 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "the run's own state; the sim.dt REBOUND sets back after integrate() (its last full step, or "
       "the value the call began with) is told from one the user sets, and does not cap the next "
       "call (a sim.steps() right after a new simulation's first integrate() takes REBOUND's 0.001 "
-      "there for a cap). "
+      "there for a cap). A periodic box's wrap is applied to the run's own state where a single "
+      "call has it; an open box's removal of a body that left it is not mirrored, and the run goes "
+      "on from the output shown there (rebound_pfvi's docs, outputs). "
       "An edit makes the shown state the user's, "
       "as after any edit. Forces beyond the fields (additional_forces, REBOUNDx's forces and their "
       "parameters, custom gravity) are evaluated once more at the run's state when a call takes it up "
@@ -1016,6 +1018,7 @@ struct pfvi_call {
     double density_sigma, density_dlog;
     uint64_t contact_steps; // n_contact_steps before the step
     double h;               // the step taken
+    int unwrapped;          // the run's end, which REBOUND's periodic wrap had moved, put back
 };
 
 // The dt_last_done a call that shows an output reports: the run's proposal
@@ -1032,6 +1035,8 @@ static void glue_show_again(struct reb_simulation* r, struct pfvi_state* st, con
     if (c->shown){
         pfvi_output_show_again(r, st);
         r->dt = c->dt_entry;
+    }else if (c->unwrapped){
+        pfvi_output_boundary(r);   // (the state was REBOUND's wrap of the end: the same again)
     }
 }
 
@@ -1083,6 +1088,11 @@ static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st
     // (REBOUND flips its sign for a run backwards: a reversal, not a new dt.)
     // (Asked only where an output is held: mid-run, nothing is.)
     c->shown = c->eligible && st->output_N != 0 && !user_set_dt(r, st, c) && pfvi_output_is_shown(r, st);
+    // The run's last step's end as REBOUND's periodic wrap left it: the end
+    // itself again, so that a time inside that step is shown from there as
+    // without the wrap; the wrap is made again where the run goes on
+    // (glue_start).
+    c->unwrapped = !c->shown && c->eligible && pfvi_output_unwrap(r, st);
     // Forces pfvi cannot see into may have changed since (a callback's own
     // variables, a REBOUNDx force added, removed or given a new parameter):
     // the run's step past the output was made with the old ones. Changed,
@@ -1142,6 +1152,24 @@ static enum pfvi_glue glue_take_up(struct reb_simulation* r, struct pfvi_state* 
 
 static enum pfvi_glue glue_start(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_call* c, size_t N){
     const double t0 = c->t0 = r->t;
+    // (A contact search (pfvi_contact.c) searches the run's own steps: a
+    // step retaken to end at a contact past the output shows the output from
+    // there, and REBOUND's collision search and Encounter see the contact
+    // when an output reaches it.)
+    c->dense = c->eligible && (c->finishing || c->shown) && st->options.epsilon > 0.;
+    // The last step went from output_last_t0 to t0 (its end unedited): a
+    // time inside it is shown from here, with no step of the run.
+    const double d = t0 - st->output_last_t0;
+    const int near = c->at_end && fabs(c->t_target - t0) <= output_near(st, t0, d);
+    const int inside = c->dense && c->finishing && (near || (c->at_end && t0 == st->output_last_t1
+        && (t0 - c->t_target)*d > 0. && (c->t_target - st->output_last_t0)*d > 0.));
+    const int show_inside = c->dense && c->finishing && (c->t_target == t0 || (inside && st->output_failed_t != t0));
+    if ((c->shown || c->unwrapped) && !show_inside){
+        // The run goes on from its own end, taken up or put back: REBOUND's
+        // periodic wrap of it first, as a single call had it after the run's
+        // step.
+        pfvi_output_boundary(r);
+    }
     c->density_N = st->density_N;
     c->density_sigma = st->density_sigma;
     c->density_dlog = st->density_dlog;
@@ -1151,21 +1179,7 @@ static enum pfvi_glue glue_start(struct reb_simulation* r, struct pfvi_state* st
         glue_show_again(r, st, c);
         return PFVI_GLUE_DONE;
     }
-    // (A contact search (pfvi_contact.c) searches the run's own steps: a
-    // step retaken to end at a contact past the output shows the output from
-    // there, and REBOUND's collision search and Encounter see the contact
-    // when an output reaches it.)
-    c->dense = c->eligible && (c->finishing || c->shown) && st->options.epsilon > 0. && st->density_sigma > 0.;
-    if (!(c->dense && c->finishing)){
-        return PFVI_GLUE_STEP;
-    }
-    // The last step went from output_last_t0 to t0 (its end unedited): a
-    // time inside it is shown from here, with no step of the run.
-    const double d = t0 - st->output_last_t0;
-    const int near = c->at_end && fabs(c->t_target - t0) <= output_near(st, t0, d);
-    const int inside = near || (c->at_end && t0 == st->output_last_t1 && (t0 - c->t_target)*d > 0.
-        && (c->t_target - st->output_last_t0)*d > 0.);
-    if (c->t_target == t0 || (inside && st->output_failed_t != t0)){
+    if (show_inside){
         return PFVI_GLUE_SHOW_INSIDE;
     }
     if (inside){
@@ -1194,9 +1208,8 @@ static enum pfvi_glue glue_show_inside(struct reb_simulation* r, struct pfvi_sta
     }
     if (trial == PFVI_TRIAL_ERROR){
         // Refused: the simulation as the call found it.
-        if (c->shown){
-            glue_show_again(r, st, c);
-        }else{
+        glue_show_again(r, st, c);
+        if (!c->shown){
             st->output_N = 0;
         }
         pfvi_report(r, st);

@@ -19,6 +19,7 @@
 #include <math.h>
 #include <string.h>
 #include "pfvi.h"
+#include "boundary.h"
 
 static void output_keep(const struct reb_particle* ps, struct pfvi_output_particle* out, size_t N){
     for (size_t i=0; i<N; i++){
@@ -99,6 +100,66 @@ static int output_var_scale(const struct reb_simulation* r, const struct pfvi_st
 // lived. With any of them set, outputs are REBOUND's own: the step is cut to
 // end on the requested time, and every hook sees a state the run has, after
 // exactly the time it lived.
+// REBOUND's periodic wrap (reb_boundary_check, after every step), applied
+// by pfvi to states REBOUND does not see when it would: the output before
+// REBOUND's own pass (which then finds nothing to do, so that the output is
+// recognised as shown), and the run's own end kept behind it when the run
+// goes on from there (glue_start: a single call wraps it after the run's
+// step). The run's end (st->end) keeps the state before the wrap, so that
+// the next step starts from the wrapped state as after a single call's wrap
+// (an edit of the particles moved). Open and shear boundaries remove
+// particles or shift velocities: not mirrored (docs/outputs.md).
+int pfvi_output_boundary(struct reb_simulation* r){
+    if (r->boundary != REB_BOUNDARY_PERIODIC){
+        return 0;
+    }
+    int moved = 0;
+    for (size_t i=0; i<r->N && !moved; i++){
+        moved = !reb_boundary_particle_is_in_box(r, r->particles[i]);
+    }
+    if (moved){
+        reb_boundary_check(r);
+    }
+    return moved;
+}
+
+int pfvi_output_unwrap(struct reb_simulation* r, struct pfvi_state* st){
+    const size_t N = r->N;
+    if (r->boundary != REB_BOUNDARY_PERIODIC || N == 0 || st->end_N != N || st->N_allocated < N
+            || pfvi_state_is_end(r, st)){
+        return 0;
+    }
+    // The wrap of the end's positions, drawn in scratch (st->start: free
+    // between steps) by REBOUND's own rule.
+    struct reb_particle* const shown = r->particles;
+    struct reb_particle* const w = st->start;
+    memcpy(w, shown, N*sizeof(*w));
+    for (size_t i=0; i<N; i++){
+        memcpy(&w[i].x, st->end[i].xv, 3*sizeof(double));
+    }
+    r->particles = w;
+    const int moved = pfvi_output_boundary(r);
+    r->particles = shown;
+    for (size_t i=0; moved && i<N; i++){
+        if (memcmp(&w[i].x, &shown[i].x, 3*sizeof(double)) != 0){
+            return 0;
+        }
+    }
+    if (!moved){
+        return 0;
+    }
+    for (size_t i=0; i<N; i++){
+        memcpy(&shown[i].x, st->end[i].xv, 3*sizeof(double));
+    }
+    if (pfvi_state_is_end(r, st)){
+        return 1;
+    }
+    for (size_t i=0; i<N; i++){
+        memcpy(&shown[i].x, &w[i].x, 3*sizeof(double));
+    }
+    return 0;
+}
+
 int pfvi_output_hooks_kept(const struct reb_simulation* r){
     return r->N_odes == 0 && r->pre_timestep_modifications == NULL && r->post_timestep_modifications == NULL;
 }
@@ -274,6 +335,7 @@ enum pfvi_trial pfvi_output_present(struct reb_simulation* r, struct pfvi_state*
     if (trial != PFVI_TRIAL_OK){
         return trial;  // the run's state is in the simulation (the caller says what is shown)
     }
+    pfvi_output_boundary(r);
     output_keep(r->particles, st->output_shown, N);
     output_keep(r->particles_var, st->output_var_shown, n);
     for (size_t i=0; i<N; i++){
