@@ -3,7 +3,7 @@ pairs: does a run with many integrate(t) calls end on the same bits, in the
 same steps, as one call? (docs/outputs.md, "Periodic boxes, open boxes and
 steps without pairs".)
 
-    python -P benchmarks/outputs_edges.py                        # 40 boxes, about 1 min on 2 cores
+    python -P benchmarks/outputs_edges.py                        # 40 boxes, under 1 s
     python -P benchmarks/outputs_edges.py --seeds 0:200 --boundary open
 
 Boxes: random systems (seeded) in a box of 4, 6 or 10 with boundary
