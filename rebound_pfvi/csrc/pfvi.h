@@ -1574,6 +1574,10 @@ PFVI_INTERNAL void pfvi_output_take_up(struct reb_simulation* r, struct pfvi_sta
 // which REBOUND applies after every step), where it would have met the run's
 // own end kept behind an output; 1 if it moved a particle.
 PFVI_INTERNAL int pfvi_output_boundary(struct reb_simulation* r);
+// REBOUND's open boundary (reb_boundary_check: the bodies that left the box
+// removed) applied to the run's own end before an output is drawn from it;
+// 1 if it removed any.
+PFVI_INTERNAL int pfvi_output_removed(struct reb_simulation* r);
 // Where the simulation is the run's last step's end moved by REBOUND's
 // periodic wrap, puts the end's positions back and returns 1; else 0, the
 // simulation as it was.

@@ -246,9 +246,9 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "the run's own state; the sim.dt REBOUND sets back after integrate() (its last full step, or "
       "the value the call began with) is told from one the user sets, and does not cap the next "
       "call (a sim.steps() right after a new simulation's first integrate() takes REBOUND's 0.001 "
-      "there for a cap). A periodic box's wrap is applied to the run's own state where a single "
-      "call has it; an open box's removal of a body that left it is not mirrored, and the run goes "
-      "on from the output shown there (rebound_pfvi's docs, outputs). "
+      "there for a cap). REBOUND's boundary (a periodic box's wrap, an open box's removal of a body "
+      "that left it) is applied to the run's own state where a single call has it: a body an open "
+      "box lost by a step's end is gone from an output inside that step too. "
       "An edit makes the shown state the user's, "
       "as after any edit. Forces beyond the fields (additional_forces, REBOUNDx's forces and their "
       "parameters, custom gravity) are evaluated once more at the run's state when a call takes it up "
@@ -1292,6 +1292,23 @@ static enum pfvi_glue glue_step(struct reb_simulation* r, struct pfvi_state* st,
 static enum pfvi_glue glue_show_passed(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_call* c,
         size_t N){
     const double t_end = r->t, h = c->h;
+    if (pfvi_output_removed(r)){
+        // The bodies an open box lost by the step's end are gone from the
+        // run's state, as after a single call's step: the output is drawn
+        // from what is left, which starts afresh (as the next step would).
+        N = r->N;
+        if (N == 0){
+            return PFVI_GLUE_DONE;
+        }
+        if (!pfvi_scratch(st, N)){
+            pfvi_report(r, st);
+            return PFVI_GLUE_DONE;
+        }
+        if (!pfvi_step_start(r, st, N, t_end)){
+            return PFVI_GLUE_DONE;   // (reported)
+        }
+        st->output_taken_up = 0;
+    }
     const double proposed = r->dt;
     const enum pfvi_trial trial = pfvi_output_present(r, st, N, c->t_target,
             fabs(c->t_target - t_end) <= output_near(st, t_end, h));

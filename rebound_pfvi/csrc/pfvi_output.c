@@ -123,6 +123,21 @@ int pfvi_output_boundary(struct reb_simulation* r){
     return moved;
 }
 
+// An open box: REBOUND removes a body that left it after every step, from
+// the state shown. Behind an output that would be the output, where the
+// body may still be inside, while a single call removes it from the run's
+// end: so pfvi removes it there, with REBOUND's own check, before the output
+// is drawn (the body is then gone from the output too). Not with
+// variational particles, whose removal REBOUND refuses.
+int pfvi_output_removed(struct reb_simulation* r){
+    if (r->boundary != REB_BOUNDARY_OPEN || r->N_var != 0){
+        return 0;
+    }
+    const size_t before = r->N;
+    reb_boundary_check(r);
+    return r->N != before;
+}
+
 int pfvi_output_unwrap(struct reb_simulation* r, struct pfvi_state* st){
     const size_t N = r->N;
     if (r->boundary != REB_BOUNDARY_PERIODIC || N == 0 || st->end_N != N || st->N_allocated < N
