@@ -90,16 +90,6 @@ static int output_var_scale(const struct reb_simulation* r, const struct pfvi_st
     return 1;
 }
 
-// Hooks REBOUND runs around each step that an output step cannot keep
-// consistent with the state it shows: the ODEs of sim.create_ode (REBOUND
-// integrates them over [t - dt_last_done, t] after the step, with the
-// particles as the step leaves them; pfvi does not step them, so it cannot
-// give them a state at an output inside its step), and pre- and post-timestep
-// modifications (REBOUNDx operators among them): they act on the state
-// shown, for dt_last_done, and an output step's time is not a time the run
-// lived. With any of them set, outputs are REBOUND's own: the step is cut to
-// end on the requested time, and every hook sees a state the run has, after
-// exactly the time it lived.
 // REBOUND's periodic wrap (reb_boundary_check, after every step), applied
 // by pfvi to states REBOUND does not see when it would: the output before
 // REBOUND's own pass (which then finds nothing to do, so that the output is
@@ -107,8 +97,8 @@ static int output_var_scale(const struct reb_simulation* r, const struct pfvi_st
 // goes on from there (glue_start: a single call wraps it after the run's
 // step). The run's end (st->end) keeps the state before the wrap, so that
 // the next step starts from the wrapped state as after a single call's wrap
-// (an edit of the particles moved). Open and shear boundaries remove
-// particles or shift velocities: not mirrored (docs/outputs.md).
+// (an edit of the particles moved). (Open boxes: pfvi_output_removed. The
+// shear boundary's wrap also shifts a velocity: not mirrored.)
 int pfvi_output_boundary(struct reb_simulation* r){
     if (r->boundary != REB_BOUNDARY_PERIODIC){
         return 0;
@@ -155,13 +145,13 @@ int pfvi_output_unwrap(struct reb_simulation* r, struct pfvi_state* st){
     r->particles = w;
     const int moved = pfvi_output_boundary(r);
     r->particles = shown;
-    for (size_t i=0; moved && i<N; i++){
+    if (!moved){
+        return 0;
+    }
+    for (size_t i=0; i<N; i++){
         if (memcmp(&w[i].x, &shown[i].x, 3*sizeof(double)) != 0){
             return 0;
         }
-    }
-    if (!moved){
-        return 0;
     }
     for (size_t i=0; i<N; i++){
         memcpy(&shown[i].x, st->end[i].xv, 3*sizeof(double));
@@ -175,6 +165,16 @@ int pfvi_output_unwrap(struct reb_simulation* r, struct pfvi_state* st){
     return 0;
 }
 
+// Hooks REBOUND runs around each step that an output step cannot keep
+// consistent with the state it shows: the ODEs of sim.create_ode (REBOUND
+// integrates them over [t - dt_last_done, t] after the step, with the
+// particles as the step leaves them; pfvi does not step them, so it cannot
+// give them a state at an output inside its step), and pre- and post-timestep
+// modifications (REBOUNDx operators among them): they act on the state
+// shown, for dt_last_done, and an output step's time is not a time the run
+// lived. With any of them set, outputs are REBOUND's own: the step is cut to
+// end on the requested time, and every hook sees a state the run has, after
+// exactly the time it lived.
 int pfvi_output_hooks_kept(const struct reb_simulation* r){
     return r->N_odes == 0 && r->pre_timestep_modifications == NULL && r->post_timestep_modifications == NULL;
 }
