@@ -699,3 +699,65 @@ def test_outputs_in_an_open_box_leave_the_run_bit_identical(epsilon, outputs):
     a, b = one.integrator, many.integrator
     assert (b.n_steps, b.n_rejected, b.n_asymmetric) == (a.n_steps, a.n_rejected, a.n_asymmetric)
     assert b.n_outputs >= len(times) - 1
+
+
+@pytest.mark.parametrize("outputs", [10, 100])
+def test_a_hook_over_free_motion_keeps_the_runs_step_after_each_output(outputs):
+    # With a post-timestep hook REBOUND cuts each call's last step to its
+    # time and starts the next call from the step it restores (here 0.001,
+    # the capped first one's). Once the test particles have left the open
+    # box the body left moves freely (u = 0, the step as it was), and the
+    # build before kept that cap for good: 3012 steps at 10 outputs, 3561 at
+    # 100, against one call's 2. A cap holds one step; the next is the run's.
+    def build():
+        sim = rebound.Simulation()
+        sim.root_size = 6.0
+        sim.N_root_x = sim.N_root_y = sim.N_root_z = 1
+        sim.boundary = "open"
+        sim.softening = 0.02
+        sim.add(m=1e-3, vx=0.1, vy=-0.05)
+        sim.add(m=0.0, x=1.57, y=-2.26, z=0.39, vx=0.93, vy=0.22, vz=-0.28)
+        sim.add(m=0.0, x=2.77, y=1.49, z=2.68, vx=0.09, vy=0.25, vz=0.40)
+        sim.integrator = "pfvi"
+        return sim
+
+    T = 5.0
+    one = run(build, [T])
+    many = build()
+    many.post_timestep_modifications = lambda simp: None
+    for k in range(outputs):
+        many.integrate(T*(k + 1)/outputs)
+    assert many.N == one.N == 1
+    # At most the cut and the capped first step of each call beyond one call's.
+    assert many.integrator.n_steps <= one.integrator.n_steps + 2*outputs
+    assert np.abs(state(many) - state(one)).max() < 1e-14
+
+
+@pytest.mark.parametrize("first", [2e-4, 9.9e-4])
+@pytest.mark.parametrize("sign", [1, -1])
+def test_a_first_output_within_rebounds_first_dt_leaves_the_run_bit_identical(first, sign):
+    # A new simulation's first integrate() to a time within REBOUND's 0.001:
+    # REBOUND cuts its 0.001 to that time and restores 0.001 after the call.
+    # The build before took that for a value the user set, and the next call
+    # capped the run's first step with it (34 steps against one call's 31,
+    # 7.3e-9 apart). pfvi now knows it for REBOUND's (pfvi_step,
+    # dt_call_first_cut), as it does after a first call of whole steps.
+    def build():
+        sim = rebound.Simulation()
+        sim.add(m=1.0)
+        sim.add(m=1e-3, a=1.0, e=0.5)
+        sim.add(m=0.0, a=2.2, e=0.3, inc=2.5)   # a retrograde test particle
+        sim.integrator = "pfvi"
+        return sim
+
+    T = sign*20.0
+    one = run(build, [T])
+    many = run(build, [sign*first, T/3, T])
+    assert state(many).tobytes() == state(one).tobytes()
+    assert many.integrator.n_steps == one.integrator.n_steps
+    # A sim.dt the user set before such a call still caps, as before.
+    capped = build()
+    capped.dt = sign*0.1
+    capped.integrate(sign*first)
+    capped.integrate(T)
+    assert capped.integrator.n_steps > one.integrator.n_steps

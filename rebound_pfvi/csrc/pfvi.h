@@ -1244,6 +1244,11 @@ struct pfvi_state {
     // integrate() that finds the simulation still at the run's step end (a
     // user may set 0.001 before a steps()).
     int dt_call_default;
+    // ... and it was found from a new simulation's first call whose first
+    // step was its last (a requested time within REBOUND's 0.001, cut to
+    // it): REBOUND restores its 0.001 after that call wherever the output
+    // lies, so the next integrate() takes it for REBOUND's there too.
+    int dt_call_first_cut;
     int call_is_integrate;   // this step's call found dt_last_done zero (integrate() begins so)
     // The last sim.dt a step found that was neither pfvi's nor REBOUND's: the
     // user's value. Never taken for REBOUND's restoring, even where REBOUND

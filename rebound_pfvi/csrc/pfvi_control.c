@@ -761,7 +761,7 @@ static double unpaired_time_scale(const struct reb_simulation* r, const struct p
 // times the aim is retaken shorter, one whose solve does not converge at
 // half (each counted in n_rejected). Forces that do not vary over a step
 // (free motion, a uniform field: u = 0) leave the step as it was, sim.dt at
-// the start. Before, the steps were sim.dt whatever epsilon asked: a test
+// the start; a sim.dt below the run's proposal caps one step. Before, the steps were sim.dt whatever epsilon asked: a test
 // particle of e = 0.9 in a Kepler potential from additional_forces ended
 // 140 off IAS15 at sim.dt = 1 with no warning (a hostile trial).
 static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
@@ -772,6 +772,14 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
     // the symmetric track: the step is the one this run proposed.
     const int output = st->output_uncapped && st->dt_proposed != 0.;
     double h = output ? fabs(st->dt_proposed) : fabs(r->dt), u = 0., u_last = INFINITY;
+    // The step this run proposed where sim.dt caps it below that (REBOUND's
+    // cut to an output, the value it restores after one, the user's): a cap
+    // holds this step only, so the next grows from the proposal, as the
+    // symmetric track goes on after a cap. (Else free motion, u = 0, kept the
+    // cap for good: with a post-timestep hook every integrate() starts
+    // capped at the step REBOUND restores, 0.001 for a new simulation, and an
+    // open box left with one body took 3012 steps for one call's 3.)
+    const double proposed = (st->dt_proposed != 0. && h < fabs(st->dt_proposed)) ? fabs(st->dt_proposed) : 0.;
     if (!(st->dt_proposed != 0. && h == fabs(st->dt_proposed))){
         // A step this run did not propose (the first, the user's, REBOUND's
         // restored last step) is at most the shortest |v|/|a| of a moving
@@ -848,7 +856,12 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
     // most PFVI_CONTROL_GROW_MAX times this one, and not grown after retakes.
     const double aimed = (u > 0.) ? PFVI_UNPAIRED_SAFETY*u_aim/u : 1.;
     const double factor = fmax(PFVI_CONTROL_SHRINK_MIN, fmin(retakes ? 1. : PFVI_CONTROL_GROW_MAX, aimed));
-    r->dt = sign*h*factor;
+    double next = h*factor;
+    if (proposed > 0. && retakes == 0){
+        // A capped step: grown from what the run proposed, not from the cap.
+        next = (u > 0.) ? fmax(PFVI_CONTROL_SHRINK_MIN*h, fmin(h*aimed, PFVI_CONTROL_GROW_MAX*proposed)) : proposed;
+    }
+    r->dt = sign*next;
     st->dt_proposed = r->dt;
     return sign*h;
 }

@@ -290,7 +290,9 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "of the forces, aimed at " PFVI_STR(PFVI_UNPAIRED_AIM) " kappa (a circular orbit's u under the "
       "density is kappa) and retaken above " PFVI_STR(PFVI_UNPAIRED_RETAKE) " times that; these steps "
       "are not time-symmetric (n_asymmetric), and forces that do not vary over a step (free motion, "
-      "a uniform field) keep sim.dt. "
+      "a uniform field) keep the step as it was (sim.dt at the start); a sim.dt below the run's "
+      "proposal (REBOUND's cut to a requested time, the value it restores after one, the user's) "
+      "caps one step, and the next is grown from the proposal. "
       "'seed' (K&V): a step is accepted if the osculating-circle estimate "
       "is at most epsilon, otherwise retried shorter (counted in n_rejected, nothing changed); "
       "the next step is h*" PFVI_STR(PFVI_CONTROL_SAFETY) "*(epsilon/estimate)^(1/"
@@ -375,6 +377,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "dt_rebound_leaves", offsetof(struct pfvi_state, dt_rebound_leaves), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_call_began", offsetof(struct pfvi_state, dt_call_began), 0, 0, 0 },
     { "", REB_INT, "dt_call_default", offsetof(struct pfvi_state, dt_call_default), 0, 0, 0 },
+    { "", REB_INT, "dt_call_first_cut", offsetof(struct pfvi_state, dt_call_first_cut), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_user", offsetof(struct pfvi_state, dt_user), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_call_cut", offsetof(struct pfvi_state, dt_call_cut), 0, 0, 0 },
     { "", REB_INT, "last_finishing", offsetof(struct pfvi_state, last_finishing), 0, 0, 0 },
@@ -1059,7 +1062,7 @@ static int rebound_restored(const struct reb_simulation* r, const struct pfvi_st
     }
     return (st->dt_rebound_leaves != 0. && dt == fabs(st->dt_rebound_leaves))
         || (st->dt_call_began != 0. && dt == fabs(st->dt_call_began)
-            && (!st->dt_call_default || (at_end && st->call_is_integrate)))
+            && (!st->dt_call_default || ((at_end || st->dt_call_first_cut) && st->call_is_integrate)))
         || (st->dt_call_cut != 0. && dt == fabs(st->dt_call_cut));
 }
 
@@ -1416,11 +1419,13 @@ static void pfvi_step(struct reb_simulation* r, void* state){
         // (REBOUND restores that, not the value the call began with.)
         st->dt_call_began = 0.;
         st->dt_call_default = 0;
+        st->dt_call_first_cut = 0;
     }
     st->last_finishing = finishing;
     // What this call began with, if a call began here, and whether it was
     // pfvi's own (read before the step changes the proposal).
     const int call_start = (r->dt_last_done == 0.), loaded = (st->end_N == 0);
+    const int fresh = loaded && st->dt_proposed == 0.;   // a new simulation: no step yet, none loaded
     st->call_is_integrate = call_start;
     // (Mid-run, sim.dt is the proposal: the rest is not asked.)
     const int began_proposed = st->dt_proposed != 0. && fabs(r->dt) == fabs(st->dt_proposed);
@@ -1439,9 +1444,20 @@ static void pfvi_step(struct reb_simulation* r, void* state){
         const int by_default = !own && (began_default || began_restored_default);
         st->dt_call_began = (own || by_default) ? st->dt_at_start : 0.;
         st->dt_call_default = by_default;
+        st->dt_call_first_cut = 0;
         st->dt_call_cut = 0.;
     }else if (call_start && finishing && loaded){
         st->dt_call_cut = st->dt_at_start;
+        if (fresh && fabs(st->dt_at_start) < PFVI_REBOUND_DT_DEFAULT){
+            // REBOUND cut a new simulation's 0.001 to a time within it, and
+            // restores 0.001 after the call: not a cap of the user's (before,
+            // the next call took it for one and cut the run's first step:
+            // Kepler e = 0.5, 29 steps against one call's 27, 2e-10 apart).
+            // (A user's own 0.001 there is the value the simulation holds.)
+            st->dt_call_began = PFVI_REBOUND_DT_DEFAULT;
+            st->dt_call_default = 1;
+            st->dt_call_first_cut = 1;
+        }
     }
     // (A later call whose first step is its last began with what the call
     // before left: what is known of it stands.)
