@@ -362,6 +362,39 @@ def test_heartbeat_sees_the_requested_times():
     assert all(b >= a for a, b in zip(seen, seen[1:]))
 
 
+@needs_python_heartbeat
+@pytest.mark.parametrize("outputs", [5, 50, 500])
+@pytest.mark.parametrize("sign", [1, -1])
+def test_heartbeats_dt_last_done_at_an_output_is_the_time_it_lived(outputs, sign):
+    # REBOUND's heartbeat runs after each step. At a requested time shown
+    # from the run, dt_last_done is now the time since the state REBOUND
+    # held before, as after a step cut to that time (the build before
+    # reported the run's proposal there: up to 0.48 more than the time
+    # passed at 50 outputs over 20 time units). The step that takes the run
+    # up again reports the proposal still: REBOUND restores sim.dt from it.
+    def build():
+        sim = kepler_planets()
+        sim.add(m=0.0, a=1.7, e=0.6, inc=2.8)   # a retrograde crosser
+        sim.integrator = "pfvi"
+        return sim
+
+    T = sign*20.0
+    times = [T*(k + 1)/outputs for k in range(outputs)]
+    sim = build()
+    seen = []
+    sim.heartbeat = lambda simp: seen.append((simp.contents.t, simp.contents.dt_last_done))
+    for t in times:
+        sim.integrate(t)
+    at_outputs = [(b[1], b[0] - a[0]) for a, b in zip(seen, seen[1:]) if b[0] in times and b[1] != 0.]
+    assert len(at_outputs) >= outputs//2
+    assert max(abs(done - lived) for done, lived in at_outputs) <= 1e-14*abs(T)
+    # Steps and outputs alike go forward, and the run is one call's.
+    assert all((b[0] - a[0])*sign >= 0. for a, b in zip(seen, seen[1:]))
+    one = run(build, [T])
+    assert state(sim).tobytes() == state(one).tobytes()
+    assert sim.integrator.n_steps == one.integrator.n_steps
+
+
 def test_variational_particles_and_megno_with_outputs():
     def build():
         sim = kepler_planets()

@@ -1024,13 +1024,23 @@ struct pfvi_call {
     int unwrapped;          // the run's end, which REBOUND's periodic wrap had moved, put back
 };
 
-// The dt_last_done a call that shows an output reports: the run's proposal
-// (so that REBOUND, restoring sim.dt after integrate(), restores it), or 0
-// with 'line'/'linetree' collisions and radii, so that REBOUND's search looks
-// at the state shown, not along a segment drawn back from it over a step it
-// did not take (the run's steps are searched along their paths).
-static double pfvi_shown_dt_done(const struct reb_simulation* r, double proposed){
-    return (pfvi_contact_line(r) && pfvi_contact_enabled(r)) ? 0. : proposed;
+// The dt_last_done a call that shows an output reports. On a finishing step
+// (REBOUND's last of the call), the time the state shown has lived since the
+// state REBOUND held before the step, as after a step cut to the time, so that
+// a heartbeat gets the time passed (before, the run's proposal: 50 outputs
+// over 20 time units summed to 48.5). Elsewhere (a step taking the run up from
+// an output), the run's proposal: REBOUND restores sim.dt after integrate()
+// from the dt_last_done of the step before its finishing one, and decides the
+// next call's finish from that; the time lived there (measured) left it
+// below the proposal, and every later call showed its time in two output
+// steps (Kepler at 100 outputs a period: 19652 against 10000). 0 with
+// 'line'/'linetree' collisions and radii, so that REBOUND's search looks at
+// the state shown, not along a segment drawn back from it over a step it did
+// not take (the run's steps are searched along their paths). (A lived time of
+// 0 would read as a call's start: the proposal then.)
+static double pfvi_shown_dt_done(const struct reb_simulation* r, const struct pfvi_call* c, double proposed){
+    const double lived = r->t - c->t_entry;
+    return (pfvi_contact_line(r) && pfvi_contact_enabled(r)) ? 0. : ((c->finishing && lived != 0.) ? lived : proposed);
 }
 
 // A refused call leaves the simulation as it found it: a shown output shown.
@@ -1145,7 +1155,7 @@ static enum pfvi_glue glue_take_up(struct reb_simulation* r, struct pfvi_state* 
         // that REBOUND's collision search and Encounter see it (REBOUND then
         // asks again for the time).
         r->dt = c->proposed;
-        r->dt_last_done = pfvi_shown_dt_done(r, c->proposed);
+        r->dt_last_done = pfvi_shown_dt_done(r, c, c->proposed);
         st->output_N = 0;
         st->output_contact_pending = 0;
         return PFVI_GLUE_DONE;
@@ -1206,7 +1216,7 @@ static enum pfvi_glue glue_show_inside(struct reb_simulation* r, struct pfvi_sta
             st->density_dlog = c->density_dlog;
         }
         r->dt = c->proposed;
-        r->dt_last_done = pfvi_shown_dt_done(r, c->proposed);
+        r->dt_last_done = pfvi_shown_dt_done(r, c, c->proposed);
         return PFVI_GLUE_DONE;
     }
     if (trial == PFVI_TRIAL_ERROR){
@@ -1266,7 +1276,11 @@ static enum pfvi_glue glue_step(struct reb_simulation* r, struct pfvi_state* st,
                 "step not taken, state restored. Use a larger dt, or start t nearer 0.", h, t0);
         return PFVI_GLUE_DONE;
     }
-    r->dt_last_done = h;
+    // (A finishing step taken up from a shown output that ends short of the
+    // time: lived from the output, as pfvi_shown_dt_done; a line search
+    // keeps the step it can draw back.)
+    r->dt_last_done = (c->shown && c->finishing && !(pfvi_contact_line(r) && pfvi_contact_enabled(r)))
+        ? r->t - c->t_entry : h;
     struct pfvi_statistics* const stats = &st->statistics;
     stats->n_steps++;
     stats->iterations_mean = (double)stats->n_iterations/(double)stats->n_steps;
@@ -1317,7 +1331,7 @@ static enum pfvi_glue glue_show_passed(struct reb_simulation* r, struct pfvi_sta
             fabs(c->t_target - t_end) <= output_near(st, t_end, h));
     r->dt = proposed;
     if (trial == PFVI_TRIAL_OK){
-        r->dt_last_done = pfvi_shown_dt_done(r, h);
+        r->dt_last_done = pfvi_shown_dt_done(r, c, h);
         st->output_contact_pending = (st->statistics.n_contact_steps != c->contact_steps);
         return PFVI_GLUE_DONE;
     }
