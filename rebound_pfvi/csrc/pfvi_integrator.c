@@ -781,7 +781,11 @@ static void pfvi_will_remove_particle(struct reb_simulation* r, size_t index){
 // The checks a step needs before it changes anything, then the start force
 // (reused from the last step where nothing it depends on can have changed)
 // and the frequencies. Returns 0, with the error reported, if no step can start.
-static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
+// keep_end: an output step from the run's end (glue_start's show inside):
+// the run's end force is left as its step left it (with velocity-dependent
+// forces the end stage's, at the stage velocity, not the force at the end
+// velocity), so that the run's next step finds what a single call's does.
+static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, int keep_end){
     struct reb_particle* const ps = r->particles;
     struct pfvi_end_state* const e = st->end;
     // e[i].a becomes the acceleration at the start of this step. It is kept
@@ -837,7 +841,7 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
             pfvi_report(r, st);
             return 0;
         }
-        for (size_t i=0; i<N; i++){
+        for (size_t i=0; !keep_end && i<N; i++){
             density_holds &= (e[i].a[0] == ps[i].ax) & (e[i].a[1] == ps[i].ay) & (e[i].a[2] == ps[i].az);
             e[i].a[0] = ps[i].ax; e[i].a[1] = ps[i].ay; e[i].a[2] = ps[i].az;
         }
@@ -1186,7 +1190,7 @@ static enum pfvi_glue glue_start(struct reb_simulation* r, struct pfvi_state* st
     c->density_N = st->density_N;
     c->density_sigma = st->density_sigma;
     c->density_dlog = st->density_dlog;
-    const int started = pfvi_step_start(r, st, N, t0);
+    const int started = pfvi_step_start(r, st, N, t0, show_inside);
     st->output_taken_up = 0;
     if (!started){
         glue_show_again(r, st, c);
@@ -1321,7 +1325,7 @@ static enum pfvi_glue glue_show_passed(struct reb_simulation* r, struct pfvi_sta
             pfvi_report(r, st);
             return PFVI_GLUE_DONE;
         }
-        if (!pfvi_step_start(r, st, N, t_end)){
+        if (!pfvi_step_start(r, st, N, t_end, 0)){
             return PFVI_GLUE_DONE;   // (reported)
         }
         st->output_taken_up = 0;
