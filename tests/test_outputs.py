@@ -795,3 +795,27 @@ def test_a_first_output_within_rebounds_first_dt_leaves_the_run_bit_identical(fi
     capped.integrate(sign*first)
     capped.integrate(T)
     assert capped.integrator.n_steps > one.integrator.n_steps
+
+
+@pytest.mark.parametrize("stages", [4, 8])
+def test_outputs_on_a_way_back_to_zero_leave_the_run_bit_identical(stages):
+    # A run whose step ends exactly at t = 0 (a way back to the start) took
+    # every output inside that step as an output step that had failed (its
+    # marker was 0, the time itself), and cut the run's step there: a
+    # hyperbolic flyby's way back with 40 outputs took 4 steps against one
+    # call's 2 (s = 8).
+    def build():
+        sim = rebound.Simulation()
+        sim.add(m=1.0)
+        sim.add(m=0.0, a=-2.0, e=3.0, f=-1.0)
+        sim.move_to_com()
+        sim.integrator = "pfvi"
+        sim.integrator.stages = stages
+        return sim
+
+    T = 5.0
+    one = run(build, [T, 0.0])
+    many = run(build, [T*(k + 1)/40 for k in range(40)] + [T*(39 - k)/40 for k in range(40)])
+    assert many.integrator.n_outputs >= 60
+    assert many.integrator.n_steps == one.integrator.n_steps
+    assert state(many).tobytes() == state(one).tobytes()

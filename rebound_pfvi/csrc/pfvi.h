@@ -1317,7 +1317,7 @@ struct pfvi_state {
     int output_taken_up;           // set by the glue: the step starts from the run's state, its force kept
     int output_contact_pending;    // the run's state kept ends a step retaken at a contact that an output
                                    // was shown before: REBOUND has not seen it yet (saved)
-    double output_failed_t;        // an output step from the state at this t did not converge
+    double output_failed_t;        // an output step from the state at this t did not converge (NaN: none)
     // MEGNO's stage velocities: w_k = w_0 + h sum_j collocation[k][j] a_j,
     // collocation[k][j] the integral of l_j from 0 to c^k (Lobatto IIIA), for s = collocation_s.
     double collocation[PFVI_STAGES_MAX][PFVI_STAGES_MAX];

@@ -495,6 +495,10 @@ static void* pfvi_create(void){
     st->options = st->settings;
     st->density_scale = 1.;
     st->track_at_end = 1;
+    // No output step has failed: not 0, a time a run may end on (a way back
+    // to the start: before, every output inside its last step was a step cut
+    // short, a hyperbolic flyby's way back 4 steps against one call's 2).
+    st->output_failed_t = NAN;
     return st;
 }
 
