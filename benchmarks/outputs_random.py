@@ -4,6 +4,7 @@ the same steps? (docs/outputs.md.)
 
     python -P benchmarks/outputs_random.py                 # 200 runs, about 1 minute
     python -P benchmarks/outputs_random.py --seeds 0:600
+    python -P benchmarks/outputs_random.py --seeds 0:150 --gr 30    # with REBOUNDx's "gr" (c = 30)
 
 Each seed draws a scene (a Kepler pair of e up to 0.95 at any inclination,
 retrograde included; a binary with a planet or test particle; a planet
@@ -14,6 +15,8 @@ T = 5, 10 or 20, and 3, 10, 40 or 100 random output times up to T; half of
 them come back to 0 through as many random times. A run is off where its
 particles' bits or its steps differ from the single calls', or where t
 differs by more than REBOUND's own finish tolerance (1e-12 at t = 0).
+--gr C adds REBOUNDx's "gr" force (velocity-dependent) with c = C to every
+run (needs reboundx).
 Printed: each such run, and the count. Against another build: run it with
 that build on PYTHONPATH.
 """
@@ -33,7 +36,7 @@ def drag(simp):
         p.ay -= 1e-3*p.vy
 
 
-def build(seed):
+def build(seed, gr=0.0, keep=None):
     rng = random.Random(seed)
     sim = rebound.Simulation()
     kind = rng.choice(["kepler", "binary", "flyby", "planets", "retrograde"])
@@ -62,24 +65,33 @@ def build(seed):
     if rng.random() < 0.25:
         sim.additional_forces = drag
         sim.force_is_velocity_dependent = 1
+    if gr:
+        import reboundx
+        extras = reboundx.Extras(sim)
+        force = extras.load_force("gr")
+        extras.add_force(force)
+        force.params["c"] = gr
+        keep.append(extras)   # (REBOUNDx's forces live as long as their Extras)
     return sim, rng, kind
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seeds", default="0:200", help="first:last (exclusive)")
+    parser.add_argument("--gr", type=float, default=0.0, help="add REBOUNDx's gr with this speed of light")
     args = parser.parse_args()
+    keep = []
     lo, hi = (int(x) for x in args.seeds.split(":"))
     off = 0
     for seed in range(lo, hi):
-        many, rng, kind = build(seed)
+        many, rng, kind = build(seed, args.gr, keep)
         T = rng.choice([5.0, 10.0, 20.0])
         back = rng.random() < 0.5
         n = rng.choice([3, 10, 40, 100])
         times = sorted(rng.uniform(0, T) for _ in range(n)) + [T]
         if back:
             times += sorted((rng.uniform(0, T) for _ in range(n)), reverse=True) + [0.0]
-        one = build(seed)[0]
+        one = build(seed, args.gr, keep)[0]
         one.integrate(T)
         if back:
             one.integrate(0.0)
