@@ -1249,6 +1249,15 @@ struct pfvi_state {
     // it): REBOUND restores its 0.001 after that call wherever the output
     // lies, so the next integrate() takes it for REBOUND's there too.
     int dt_call_first_cut;
+    // sim.dt as REBOUND's last synchronize found it: REBOUND synchronizes
+    // right before it cuts sim.dt to finish on a requested time, so on a
+    // call's first step that finishes it is the dt the call began with (the
+    // one REBOUND restores after the call).
+    double dt_at_sync;
+    // A new simulation's first step, cut by REBOUND to a time within the dt
+    // its call began with: that dt (the step a single call would take
+    // first; control_unpaired takes it, the output is shown from it); else 0.
+    double dt_first_uncut;
     int call_is_integrate;   // this step's call found dt_last_done zero (integrate() begins so)
     // The last sim.dt a step found that was neither pfvi's nor REBOUND's: the
     // user's value. Never taken for REBOUND's restoring, even where REBOUND

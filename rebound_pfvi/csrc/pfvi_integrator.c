@@ -763,10 +763,10 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_option
 // variables, REBOUNDx parameters), so the next step evaluates its start force
 // afresh, as a new integrate() would.
 static void pfvi_synchronize(struct reb_simulation* r, void* state){
-    (void)r;
     struct pfvi_state* const st = state;
     if (st){
         st->cache_N = 0;
+        st->dt_at_sync = r->dt;
     }
 }
 
@@ -1459,8 +1459,12 @@ static void pfvi_step(struct reb_simulation* r, void* state){
             || began_restored_default)){
         st->dt_user = fabs(r->dt);
     }
+    // (REBOUND cut from what it synchronized with: at least the cut, the same way.)
+    const int cut_from_known = st->dt_at_sync*st->dt_at_start > 0. && fabs(st->dt_at_sync) >= fabs(st->dt_at_start);
+    st->dt_first_uncut = (call_start && finishing && fresh && cut_from_known) ? st->dt_at_sync : 0.;
     pfvi_step_model_keep(r, st);
     pfvi_step_take(r, st);
+    st->dt_first_uncut = 0.;
     if (call_start && !finishing){
         const int own = began_proposed || began_restored_own;
         const int by_default = !own && (began_default || began_restored_default);
@@ -1470,12 +1474,15 @@ static void pfvi_step(struct reb_simulation* r, void* state){
         st->dt_call_cut = 0.;
     }else if (call_start && finishing && loaded){
         st->dt_call_cut = st->dt_at_start;
-        if (fresh && fabs(st->dt_at_start) < PFVI_REBOUND_DT_DEFAULT){
+        if (fresh && cut_from_known && fabs(st->dt_at_sync) == PFVI_REBOUND_DT_DEFAULT){
             // REBOUND cut a new simulation's 0.001 to a time within it, and
             // restores 0.001 after the call: not a cap of the user's (before,
             // the next call took it for one and cut the run's first step:
             // Kepler e = 0.5, 29 steps against one call's 27, 2e-10 apart).
-            // (A user's own 0.001 there is the value the simulation holds.)
+            // (A user's own 0.001 there is the value the simulation holds;
+            // a call that began with another value of the user's leaves that
+            // restored, and a 0.001 set after it is the user's: a hostile
+            // trial.)
             st->dt_call_began = PFVI_REBOUND_DT_DEFAULT;
             st->dt_call_default = 1;
             st->dt_call_first_cut = 1;
