@@ -803,40 +803,6 @@ def test_a_first_output_within_rebounds_first_dt_leaves_the_run_bit_identical(fi
         assert capped.integrator.n_steps > one.integrator.n_steps
 
 
-@pytest.mark.parametrize("first", [1e-9, 2e-4, 9.99e-4])
-@pytest.mark.parametrize("stages", [3, 8])
-def test_a_first_output_within_rebounds_first_dt_without_pairs(first, stages):
-    # Test particles in a potential (no pairs): the first step is sim.dt. A
-    # first integrate() to a time within it was that time's step, and the
-    # steps grew from it (s = 8, integrate(1e-9) first: 135 steps against one
-    # call's 114; a hostile trial). The step is now the dt the call began
-    # with, and the output is shown from it.
-    def build():
-        sim = rebound.Simulation()
-        sim.gravity = "none"
-        for k in range(2):
-            sim.add(m=0.0, x=1.0 + 0.3*k, vy=1.0 - 0.2*k, vz=0.05*k)
-        sim.additional_forces = _kepler_potential
-        sim.integrator = "pfvi"
-        sim.integrator.stages = stages
-        return sim
-
-    one = run(build, [20.0])
-    many = run(build, [first, 20.0])
-    assert many.integrator.n_steps == one.integrator.n_steps
-    assert state(many).tobytes() == state(one).tobytes()
-
-
-def _kepler_potential(simp):
-    for i in range(simp.contents.N):
-        p = simp.contents.particles[i]
-        r2 = p.x*p.x + p.y*p.y + p.z*p.z
-        f = -1.0/(r2*math.sqrt(r2))
-        p.ax += f*p.x
-        p.ay += f*p.y
-        p.az += f*p.z
-
-
 @pytest.mark.parametrize("stages", [4, 8])
 def test_outputs_on_a_way_back_to_zero_leave_the_run_bit_identical(stages):
     # A run whose step ends exactly at t = 0 (a way back to the start) took

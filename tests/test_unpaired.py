@@ -197,3 +197,29 @@ def test_a_force_that_jumps_is_kept_unresolved_and_said_once():
     assert sum("kept unresolved" in str(w.message) for w in said) == 1
     assert sim.integrator.n_unresolved > 0
     assert sim.integrator.n_rejected < 60 * sim.integrator.n_steps
+
+
+@pytest.mark.parametrize("first", [1e-9, 2e-4, 9.99e-4])
+@pytest.mark.parametrize("stages", [3, 8])
+def test_a_first_output_within_rebounds_first_dt_without_pairs(first, stages):
+    # Test particles in a potential (no pairs): the first step is sim.dt. A
+    # first integrate() to a time within it was that time's step, and the
+    # steps grew from it (s = 8, integrate(1e-9) first: 135 steps against one
+    # call's 114; a hostile trial). The step is now the dt the call began
+    # with, and the output is shown from it.
+    def build():
+        sim = rebound.Simulation()
+        sim.gravity = "none"
+        for k in range(2):
+            sim.add(m=0.0, x=1.0 + 0.3*k, vy=1.0 - 0.2*k, vz=0.05*k)
+        sim.additional_forces = kepler_potential
+        sim.integrator = "pfvi"
+        sim.integrator.stages = stages
+        return sim
+
+    one, many = build(), build()
+    one.integrate(20.0)
+    many.integrate(first)
+    many.integrate(20.0)
+    assert many.integrator.n_steps == one.integrator.n_steps
+    assert [(p.xyz, p.vxyz) for p in many.particles] == [(p.xyz, p.vxyz) for p in one.particles]
