@@ -1072,6 +1072,9 @@ struct pfvi_state {
     // reached what made the first trial coarse (pfvi_control.c,
     // control_unpaired; saved).
     int unpaired_suspect;
+    // Without pairs: the longest step taken where no force varied (u = 0)
+    // and none was retaken, which free motion grows back to (saved).
+    double dt_free;
 
     // Scratch
     size_t N_allocated;
@@ -1535,13 +1538,17 @@ PFVI_INTERNAL void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state*
 // pull_above against its net acceleration is measured against the largest
 // pull on it at the step's start or end too (if field is not NULL); with
 // residual, a fitted particle's values are its stage accelerations less the
-// harmonic pull -omega^2 d its fitted path carries (the residual).
+// harmonic pull -omega^2 d its fitted path carries (the residual). With
+// motion > 0, against motion |v|/|h| too (|v| the larger speed at the step's
+// ends): an acceleration whose whole kick over the step is below motion
+// times the body's speed cannot move it by that fraction of its path,
+// resolved or not.
 struct pfvi_resolution {
     double ratio;
     size_t particle;    // SIZE_MAX: none
 };
 PFVI_INTERNAL struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, const struct pfvi_state* st,
-        size_t N, double h, const struct pfvi_field* field, double pull_above, int residual);
+        size_t N, double h, const struct pfvi_field* field, double pull_above, int residual, double motion);
 // The error per orbit a step of resolution u implies at s stages (where a
 // Kepler orbit is resolved worst: PFVI_SYMMETRIC_CONSTANTS at u =
 // PFVI_RESOLUTION_CONSTANTS kappa), and its inverse.

@@ -292,7 +292,7 @@ static double factorial(int n){
 static double symmetric_resolution(const struct reb_simulation* r, const struct pfvi_state* st, size_t N, double h,
         const struct pfvi_field* field, double above){
     const int s = st->options.stages;
-    return pow(factorial(s - 1)*pfvi_trial_resolution(r, st, N, h, field, above, 0).ratio, 1./(s - 1.));
+    return pow(factorial(s - 1)*pfvi_trial_resolution(r, st, N, h, field, above, 0, 0.).ratio, 1./(s - 1.));
 }
 
 // The resolution of a trial step read with both ends' partners: the weak-pull
@@ -813,25 +813,29 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
             // (Of a fitted step, what its fitted path does not carry: the
             // oscillator at its own frequency is exact at any step, and keeps
             // sim.dt, as the seed's fixed steps did.)
-            u = pow(factorial(s - 1)*pfvi_trial_resolution(r, st, N, sign*h, &field, constants->above, 1).ratio,
+            u = pow(factorial(s - 1)*pfvi_trial_resolution(r, st, N, sign*h, &field, constants->above, 1,
+                constants->epsilon_effective).ratio,
                 1./(s - 1.));
             // Retaken while shorter steps resolve the forces better (a first
             // sim.dt far beyond the orbit: the stages' u saturates, so each
             // retake shortens by a bounded factor); kept after
             // RESOLUTION_RETRIES retakes that stopped helping (forces that
             // jump), or after CONTROL_MAX_REJECTIONS in all.
+            // Also kept where a retake would be below t's rounding: this
+            // step's solve converged, and a shorter one cannot be taken.
             const int coarse = u > PFVI_UNPAIRED_RETAKE*u_aim;
             const int helping = u < PFVI_UNPAIRED_HELPING*u_last;
+            h_next = h*fmax(PFVI_CONTROL_SHRINK_MIN, fmin(0.5, u_aim/u));
             unresolved = coarse && ((retakes >= PFVI_RESOLUTION_RETRIES && !helping)
                 || retakes >= PFVI_CONTROL_MAX_REJECTIONS
-                || (retakes == 0 && st->unpaired_suspect >= PFVI_RESOLUTION_RETRIES));
+                || (retakes == 0 && st->unpaired_suspect >= PFVI_RESOLUTION_RETRIES)
+                || t0 + sign*h_next == t0);
             u_last = u;
             if (!coarse || unresolved){
                 break;
             }
             pfvi_roll_back(r, st, N, t0);
             retakes++;
-            h_next = h*fmax(PFVI_CONTROL_SHRINK_MIN, fmin(0.5, u_aim/u));
         }else{
             st->statistics.n_solve_halved++;
         }
@@ -867,6 +871,16 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
     if (proposed > 0. && retakes == 0){
         // A capped step: grown from what the run proposed, not from the cap.
         next = (u > 0.) ? fmax(PFVI_CONTROL_SHRINK_MIN*h, fmin(h*aimed, PFVI_CONTROL_GROW_MAX*proposed)) : proposed;
+    }
+    if (u == 0. && retakes == 0){
+        // Free motion grows back to the longest free step this run took
+        // (sim.dt, as it began): never beyond, so that it does not leap a
+        // force region the way a step without bound would. (Before, it kept
+        // the step it had where a force region ended: a body leaving a slab
+        // went on at 1e-4 for the 0.5 it had before it, 9820 steps
+        // against 100 for a Gaussian slab's tails.)
+        st->dt_free = fmax(st->dt_free, h);
+        next = fmax(next, fmin(PFVI_CONTROL_GROW_MAX*h, st->dt_free));
     }
     r->dt = sign*next;
     st->dt_proposed = r->dt;

@@ -289,10 +289,14 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "additional_forces) there is no density: each step is sized from its own stages' resolution u "
       "of the forces, aimed at " PFVI_STR(PFVI_UNPAIRED_AIM) " kappa (a circular orbit's u under the "
       "density is kappa) and retaken above " PFVI_STR(PFVI_UNPAIRED_RETAKE) " times that; these steps "
-      "are not time-symmetric (n_asymmetric), and forces that do not vary over a step (free motion, "
-      "a uniform field) keep the step as it was (sim.dt at the start); a sim.dt below the run's "
-      "proposal (REBOUND's cut to a requested time, the value it restores after one, the user's) "
-      "caps one step, and the next is grown from the proposal. "
+      "are not time-symmetric (n_asymmetric). A body's resolution is measured against its largest "
+      "stage acceleration and against epsilon |v|/|h| (a force that vanishes at the edge of its "
+      "region reads the same at any step ending there, but its kick cannot move the body by epsilon "
+      "of its path). Forces that do not vary over a step (free motion, a uniform field) keep the "
+      "step, or grow it back (at most " PFVI_STR(PFVI_CONTROL_GROW_MAX) "x a step) to the longest "
+      "such step the run took (sim.dt at the start), never beyond, so as not to leap a force region; "
+      "a sim.dt below the run's proposal (REBOUND's cut to a requested time, the value it restores "
+      "after one, the user's) caps one step, and the next is grown from the proposal. "
       "'seed' (K&V): a step is accepted if the osculating-circle estimate "
       "is at most epsilon, otherwise retried shorter (counted in n_rejected, nothing changed); "
       "the next step is h*" PFVI_STR(PFVI_CONTROL_SAFETY) "*(epsilon/estimate)^(1/"
@@ -322,6 +326,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         offsetof(struct pfvi_state, var_predictor_N), sizeof(*((struct pfvi_state*)0)->var_predictor_x), 0 },
     { "", REB_DOUBLE, "dt_reversible", offsetof(struct pfvi_state, dt_reversible), 0, 0, 0 },
     { "", REB_INT, "unpaired_suspect", offsetof(struct pfvi_state, unpaired_suspect), 0, 0, 0 },
+    { "", REB_DOUBLE, "dt_free", offsetof(struct pfvi_state, dt_free), 0, 0, 0 },
     { "", REB_DOUBLE, "rho", offsetof(struct pfvi_state, rho), 0, 0, 0 },
     { "", REB_DOUBLE, "rho_sign", offsetof(struct pfvi_state, rho_sign), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_proposed", offsetof(struct pfvi_state, dt_proposed), 0, 0, 0 },
