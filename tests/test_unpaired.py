@@ -167,6 +167,32 @@ def test_a_body_leaves_a_force_that_vanishes_at_its_edge(kind):
     assert after[-2] == 0.5
 
 
+def test_a_force_too_weak_to_matter_does_not_let_the_steps_leap_a_slab():
+    # Judged against the motion, a background of 1e-12 sin x is resolved at
+    # any step: grown without bound, the steps reached 7.8 and leapt the
+    # slab at x = 200 (its whole push missed; a hostile trial). They grow
+    # no further than the background's own scale, or free motion, allows:
+    # 337 steps, 3.8e-11 off (the build before: 389, 5.1e-11).
+    sim = rebound.Simulation()
+    sim.gravity = "none"
+    sim.add(m=0.0, x=0.0, vx=1.0)
+
+    def forces(simp):
+        p = simp.contents.particles[0]
+        p.ax += 1e-12 * math.sin(p.x)
+        q2 = ((p.x - 200.0) / SLAB_W) ** 2
+        if q2 < 1.0:
+            p.ay += slab_profile("smooth", q2)
+
+    KEPT.append(forces)
+    sim.additional_forces = forces
+    sim.dt = 0.5
+    sim.integrator = "pfvi"
+    sim.integrate(400.0)
+    assert abs(sim.particles[0].vy - slab_impulse("smooth") / sim.particles[0].vx) < 1e-9
+    assert sim.integrator.n_steps < 1000
+
+
 def test_free_motion_grows_back_from_an_archive_as_in_one_call(tmp_path):
     # The longest free step is saved: a run restarted while its steps grow
     # back after the slab ends on one call's bits and steps.

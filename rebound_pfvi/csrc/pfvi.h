@@ -1073,7 +1073,8 @@ struct pfvi_state {
     // control_unpaired; saved).
     int unpaired_suspect;
     // Without pairs: the longest step taken where no force varied (u = 0)
-    // and none was retaken, which free motion grows back to (saved).
+    // and none was retaken, or the run's first sim.dt if longer, which free
+    // motion grows back to (saved).
     double dt_free;
 
     // Scratch
@@ -1546,6 +1547,7 @@ PFVI_INTERNAL void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state*
 struct pfvi_resolution {
     double ratio;
     size_t particle;    // SIZE_MAX: none
+    double own;         // the largest ratio without the motion floor
 };
 PFVI_INTERNAL struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, const struct pfvi_state* st,
         size_t N, double h, const struct pfvi_field* field, double pull_above, int residual, double motion);

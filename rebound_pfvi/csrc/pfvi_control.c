@@ -795,9 +795,11 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
         // pericentre of e = 0.99 ejected the body; REBOUND's 0.001 an orbit
         // of a = 3e-4: a hostile trial).
         const double tau = unpaired_time_scale(r, st, N);
+        st->dt_free = (st->dt_free == 0.) ? h : st->dt_free;   // (the first: sim.dt)
         h = (tau > 0. && h > tau) ? tau : h;
     }
     int retakes = 0, unresolved = 0;
+    double u_own = 0.;
     struct pfvi_field field;
     for (;;){
         const enum pfvi_trial trial = pfvi_trial_step(r, st, N, t0, sign*h);
@@ -813,9 +815,10 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
             // (Of a fitted step, what its fitted path does not carry: the
             // oscillator at its own frequency is exact at any step, and keeps
             // sim.dt, as the seed's fixed steps did.)
-            u = pow(factorial(s - 1)*pfvi_trial_resolution(r, st, N, sign*h, &field, constants->above, 1,
-                constants->epsilon_effective).ratio,
-                1./(s - 1.));
+            const struct pfvi_resolution res = pfvi_trial_resolution(r, st, N, sign*h, &field, constants->above, 1,
+                constants->epsilon_effective);
+            u = pow(factorial(s - 1)*res.ratio, 1./(s - 1.));
+            u_own = pow(factorial(s - 1)*res.own, 1./(s - 1.));
             // Retaken while shorter steps resolve the forces better (a first
             // sim.dt far beyond the orbit: the stages' u saturates, so each
             // retake shortens by a bounded factor); kept after
@@ -881,6 +884,14 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
         // against 100 for a Gaussian slab's tails.)
         st->dt_free = fmax(st->dt_free, h);
         next = fmax(next, fmin(PFVI_CONTROL_GROW_MAX*h, st->dt_free));
+    }else if (u_own > u){
+        // Resolved only against the motion (a force too weak to matter over
+        // this step): grown no further than the force's own scale allows,
+        // or free motion would. (Without this bound a weak background of
+        // 1e-12 sin x let the steps grow to 7.8 and leap a slab; a hostile trial.)
+        const double own = h*fmax(PFVI_CONTROL_SHRINK_MIN,
+            fmin(retakes ? 1. : PFVI_CONTROL_GROW_MAX, PFVI_UNPAIRED_SAFETY*u_aim/u_own));
+        next = fmin(next, fmax(own, fmin(PFVI_CONTROL_GROW_MAX*h, st->dt_free)));
     }
     r->dt = sign*next;
     st->dt_proposed = r->dt;

@@ -265,7 +265,7 @@ struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, con
     const int s = st->options.stages;
     const double* const weights = (s == 2) ? two_point : st->rule.lagrange;
     const double* const nodes = (s == 2) ? two_point_nodes : st->rule.c;
-    struct pfvi_resolution worst = {0., SIZE_MAX};
+    struct pfvi_resolution worst = {0., SIZE_MAX, 0.};
     for (size_t i=0; i<N; i++){
         double a[PFVI_STAGES_MAX][3], f[PFVI_STAGES_MAX][3];
         scheme->stage_accelerations(r, st, i, a);
@@ -300,6 +300,7 @@ struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, con
             pull2 = fmax(pull0, pull1);
             ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, pull2);
         }
+        worst.own = (ratio > worst.own || ratio != ratio) ? ratio : worst.own;
         if (motion > 0. && ratio > pull_above){
             // An acceleration that vanishes where a force region ends goes
             // as a power of the distance to its edge, so against itself a
@@ -327,7 +328,8 @@ struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, con
             }
         }
         if (ratio > worst.ratio || (ratio != ratio && worst.ratio == worst.ratio)){
-            worst = (struct pfvi_resolution){ratio, i};
+            worst.ratio = ratio;
+            worst.particle = i;
         }
     }
     return worst;
