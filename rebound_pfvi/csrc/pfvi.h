@@ -1076,6 +1076,9 @@ struct pfvi_state {
     // and none was retaken, or the run's first sim.dt if longer, which free
     // motion grows back to (saved).
     double dt_free;
+    // Without pairs: whether the last step was retaken (the stages may then
+    // be judged against the motion too: pfvi_control.c; saved).
+    int unpaired_retaken;
 
     // Scratch
     size_t N_allocated;

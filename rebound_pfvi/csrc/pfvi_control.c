@@ -819,6 +819,14 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
                 constants->epsilon_effective);
             u = pow(factorial(s - 1)*res.ratio, 1./(s - 1.));
             u_own = pow(factorial(s - 1)*res.own, 1./(s - 1.));
+            if (!st->unpaired_retaken && retakes == 0 && u_own > PFVI_UNPAIRED_RETAKE*u_aim){
+                // Resolved against the motion only after a retake, of this
+                // step or the one before (the steps are closing in on an
+                // edge): a first trial whose stages caught only a tail of a
+                // force (sim.dt = 100 from 10 before a Gaussian slab) is
+                // retaken as before, not let leap it (0.35 off; a hostile trial).
+                u = u_own;
+            }
             // Retaken while shorter steps resolve the forces better (a first
             // sim.dt far beyond the orbit: the stages' u saturates, so each
             // retake shortens by a bounded factor); kept after
@@ -858,6 +866,7 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
     }
     // (Counted over the steps in between too, which the proposal keeps as
     // short: a step that resolves its forces near the aim ends the count.)
+    st->unpaired_retaken = (retakes > 0);
     const int low = u < PFVI_UNPAIRED_SUSPECT*u_aim;
     st->unpaired_suspect = (unresolved || !low) ? 0 : st->unpaired_suspect + (retakes > 0);
     {

@@ -290,7 +290,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "of the forces, aimed at " PFVI_STR(PFVI_UNPAIRED_AIM) " kappa (a circular orbit's u under the "
       "density is kappa) and retaken above " PFVI_STR(PFVI_UNPAIRED_RETAKE) " times that; these steps "
       "are not time-symmetric (n_asymmetric). A body's resolution is measured against its largest "
-      "stage acceleration and against epsilon |v|/|h| (a force that vanishes at the edge of its "
+      "stage acceleration and, once a step was retaken, against epsilon |v|/|h| (a force that vanishes at the edge of its "
       "region reads the same at any step ending there, but its kick cannot move the body by epsilon "
       "of its path); a step so resolved only against the motion grows no further than the force's "
       "own scale, or free motion, allows. Forces that do not vary over a step (free motion, a uniform field) keep the "
@@ -328,6 +328,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "dt_reversible", offsetof(struct pfvi_state, dt_reversible), 0, 0, 0 },
     { "", REB_INT, "unpaired_suspect", offsetof(struct pfvi_state, unpaired_suspect), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_free", offsetof(struct pfvi_state, dt_free), 0, 0, 0 },
+    { "", REB_INT, "unpaired_retaken", offsetof(struct pfvi_state, unpaired_retaken), 0, 0, 0 },
     { "", REB_DOUBLE, "rho", offsetof(struct pfvi_state, rho), 0, 0, 0 },
     { "", REB_DOUBLE, "rho_sign", offsetof(struct pfvi_state, rho_sign), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_proposed", offsetof(struct pfvi_state, dt_proposed), 0, 0, 0 },
