@@ -4,6 +4,7 @@ is sized from its own stages' resolution (pfvi_control.c, control_unpaired).
 The build before took sim.dt whatever epsilon asked: a test particle of
 e = 0.9 in a Kepler potential ended 140 off IAS15 at sim.dt = 1, silently."""
 import math
+import warnings
 
 import pytest
 import rebound
@@ -210,6 +211,48 @@ def test_a_first_step_that_caught_only_a_tail_does_not_leap_the_force():
     sim.integrator = "pfvi"
     sim.integrate(20.0)
     assert abs(sim.particles[0].vy - SLAB_W * math.sqrt(math.pi)) < 1e-9
+
+
+def test_a_slab_at_tight_epsilon_is_not_kept_unresolved_at_first_trials():
+    # The shortcut that keeps a coarse first trial unresolved after steps
+    # that left a jump behind counted steps low against the motion too: the
+    # approach to a slab at s = 7 and epsilon 1e-12 was taken as a jump's,
+    # and the body ended 6.2e-9 off the exact push (a hostile trial). Low
+    # against the force's own scale: 2.7e-11.
+    sim = through_a_slab("smooth")
+    sim.integrator.stages = 7
+    sim.integrator.epsilon = 1e-12
+    sim.integrate(16.0)
+    impulse = slab_impulse("smooth")
+    assert abs(sim.particles[0].vy - impulse / 1.0) < 1e-10
+    assert abs(sim.particles[1].vy - (0.1 + impulse / 1.3)) < 1e-10
+
+
+@pytest.mark.parametrize("stages, epsilon, most", [(4, 1e-6, 1), (5, 1e-12, 8)])
+def test_a_smooth_force_is_not_counted_unresolved(stages, epsilon, most):
+    # A Gaussian is smooth: the steps through its tails are retaken as the
+    # force grows, which the shortcut above took for a jump's (n_unresolved
+    # 205 at s = 4 and epsilon 1e-6, 521 at s = 5 and 1e-12, each warned
+    # "forces that jump"; a hostile trial). Now 1 and 8, in the far tail.
+    sim = rebound.Simulation()
+    sim.gravity = "none"
+    sim.add(m=0.0, x=0.0, vx=1.0)
+
+    def gauss(simp):
+        p = simp.contents.particles[0]
+        p.ay += math.exp(-(((p.x - SLAB_X) / SLAB_W) ** 2))
+
+    KEPT.append(gauss)
+    sim.additional_forces = gauss
+    sim.dt = 0.5
+    sim.integrator = "pfvi"
+    sim.integrator.stages = stages
+    sim.integrator.epsilon = epsilon
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sim.integrate(20.0)
+    assert sim.integrator.n_unresolved <= most
+    assert abs(sim.particles[0].vy - SLAB_W * math.sqrt(math.pi)) < max(1e3 * epsilon, 1e-13)
 
 
 def test_free_motion_grows_back_from_an_archive_as_in_one_call(tmp_path):

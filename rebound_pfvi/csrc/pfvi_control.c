@@ -867,7 +867,12 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
     // (Counted over the steps in between too, which the proposal keeps as
     // short: a step that resolves its forces near the aim ends the count.)
     st->unpaired_retaken = (retakes > 0);
-    const int low = u < PFVI_UNPAIRED_SUSPECT*u_aim;
+    // Low against the force's own scale: against the motion (u, after a
+    // retake) a Gaussian's far tail reads low at any step, so that the
+    // retakes of its approach counted as a jump's and the shortcut kept
+    // coarse first trials unresolved (205 warned steps at s = 4, epsilon
+    // 1e-6, and a slab at s = 7, epsilon 1e-12, 6.2e-9 off; a hostile trial).
+    const int low = u_own < PFVI_UNPAIRED_SUSPECT*u_aim;
     st->unpaired_suspect = (unresolved || !low) ? 0 : st->unpaired_suspect + (retakes > 0);
     {
         static const double constant[PFVI_STAGES_MAX + 1] = PFVI_SYMMETRIC_CONSTANTS;
