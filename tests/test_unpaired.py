@@ -228,6 +228,24 @@ def test_a_slab_at_tight_epsilon_is_not_kept_unresolved_at_first_trials():
     assert abs(sim.particles[1].vy - (0.1 + impulse / 1.3)) < 1e-10
 
 
+def test_a_low_order_step_at_an_edge_does_not_end_at_ts_rounding():
+    # At s = 3 the C1 slab's edges are resolved by no step above t's
+    # rounding: the step was kept there, unresolved, and the next one
+    # proposed below the rounding, which refused the run ("the step dt =
+    # 7e-16 does not change t" at t = 10.2; a hostile trial). Proposed at
+    # twice the kept step for up to 5 such steps in a row: 1824 steps,
+    # both bodies within 4e-8 of the exact push, warned as unresolved.
+    sim = through_a_slab("smooth")
+    sim.integrator.stages = 3
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sim.integrate(16.0)
+    impulse = slab_impulse("smooth")
+    assert abs(sim.particles[0].vy - impulse / 1.0) < 1e-7
+    assert abs(sim.particles[1].vy - (0.1 + impulse / 1.3)) < 1e-7
+    assert sim.integrator.n_unresolved > 0
+
+
 @pytest.mark.parametrize("stages, epsilon, most", [(4, 1e-6, 1), (5, 1e-12, 8)])
 def test_a_smooth_force_is_not_counted_unresolved(stages, epsilon, most):
     # A Gaussian is smooth: the steps through its tails are retaken as the
