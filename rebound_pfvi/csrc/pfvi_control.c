@@ -905,9 +905,8 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
         // Free motion grows back to the longest free step this run took
         // (sim.dt, as it began): never beyond, so that it does not leap a
         // force region the way a step without bound would. (Before, it kept
-        // the step it had where a force region ended: a body leaving a slab
-        // went on at 1e-4 for the 0.5 it had before it, 9820 steps
-        // against 100 for a Gaussian slab's tails.)
+        // the step it had where a force region ended: a Gaussian slab
+        // crossed at sim.dt = 0.5 took 1359 steps to t = 20, now 543.)
         st->dt_free = fmax(st->dt_free, h);
         next = fmax(next, fmin(PFVI_CONTROL_GROW_MAX*h, st->dt_free));
     }else if (u_own > u){
