@@ -4,6 +4,7 @@ category.
 
     python -P benchmarks/step_budget.py [--sizes 2,3,11,101,1001] [--integrators pfvi,ias15,bs]
                                         [--baseline "PYTHONPATH=... python3"] [--output docs/step-budget.md]
+    python -P benchmarks/step_budget.py --phases [--sizes 2,3,11]
 
 Each (system, integrator) runs in a child process under
 `valgrind --tool=callgrind --collect-atstart=no --toggle-collect=reb_simulation_step`,
@@ -41,6 +42,16 @@ not what it calls):
 
 A --baseline command (e.g. another build on PYTHONPATH) adds its rows for
 pfvi, counted the same way in the same run.
+
+--phases: pfvi's step by the phases of its algorithm instead, each the
+inclusive count of the function that runs it (what it calls included), per
+step: the work of the solve's rounds (forces: stage positions, the gravity
+pass and back; the Newton correction; the rounds' stage equations; the
+change measured) against the work done once a step (the two-body
+predictor; the Newton factorisation; the step control outside the trial
+step: time scales and the resolution check; the rest of the trial and of
+the solve; what lies outside the control). It says what a cheaper round
+can buy at most.
 
 --wall R: instead of counting, times pfvi's steps on the same systems (CPU
 time of sim.steps, no valgrind) for this build and the --baseline build,
@@ -164,6 +175,66 @@ def count(prefix, n, integrator, steps, workdir):
     return {k: v / steps for k, v in totals.items()}
 
 
+# (label, functions whose inclusive counts add, functions whose inclusive counts are taken off)
+PHASES = (
+    ("rounds: forces", ("stage_solve_forces",), ()),
+    ("rounds: Newton correction", ("newton_correct_unit",), ()),
+    ("rounds: stage equations", ("stage_rounds",), ()),
+    ("rounds: change", ("pfvi_solve_change",), ()),
+    ("step: predictor", ("pfvi_solve_predict",), ()),
+    ("step: Newton factorisation", ("pfvi_newton_prepare",), ()),
+    ("step: control", ("pfvi_controlled_step",), ("pfvi_trial_step",)),
+    ("step: rest of the trial", ("pfvi_trial_step",), ("stage_solve_forces", "newton_correct_unit", "stage_rounds",
+                                                       "pfvi_solve_change", "pfvi_solve_predict",
+                                                       "pfvi_newton_prepare")),
+    ("step: outside the control", ("reb_simulation_step",), ("pfvi_controlled_step",)),
+)
+
+
+def phases(prefix, n, steps, workdir):
+    out = os.path.join(workdir, f"cgp.{n}")
+    script = os.path.join(workdir, "child.py")
+    with open(script, "w") as f:
+        f.write(CHILD)
+    real = subprocess.run(["env"] + prefix[:-1] + [prefix[-1], "-c", "import sys; print(sys.executable)"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    cmd = ["env"] + prefix[:-1] + ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
+                                   "--collect-atstart=no", "--toggle-collect=reb_simulation_step",
+                                   real, "-P", script, str(n), "pfvi", str(steps)]
+    run = subprocess.run(cmd, capture_output=True, text=True)
+    if run.returncode != 0 or "STEPS" not in run.stdout:
+        raise RuntimeError(f"child failed ({n}): {run.stderr[-2000:]}")
+    annotate = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--auto=no", "--threshold=100", out],
+                              capture_output=True, text=True, check=True).stdout
+    os.remove(out)
+    inclusive = {}
+    for line in annotate.splitlines():
+        m = LINE.match(line)
+        if m:
+            # (a target clone, .avx2, or GCC's .constprop copy counts as its
+            # function; a function listed under two spellings of its file, as an
+            # in-place build's debug information can give, is counted once)
+            name = m.group(3).split(".")[0]
+            key = (name, os.path.basename(m.group(2)), m.group(3))
+            inclusive.setdefault(name, {})[key] = int(m.group(1).replace(",", ""))
+    inclusive = {name: sum(parts.values()) for name, parts in inclusive.items()}
+    row = {label: (sum(inclusive.get(f, 0) for f in plus) - sum(inclusive.get(f, 0) for f in minus)) / steps
+           for label, plus, minus in PHASES}
+    row["step"] = inclusive.get("reb_simulation_step", 0) / steps
+    return row
+
+
+def phase_table(rows):
+    labels = [label for label, _, _ in PHASES]
+    lines = ["| N | instructions/step | " + " | ".join(labels) + " | once a step |",
+             "|" + "---|" * (3 + len(labels))]
+    for n, row in rows:
+        once = sum(row[label] for label in labels if label.startswith("step:"))
+        cells = " | ".join(f"{row[label] / 1e3:,.1f}k" for label in labels)
+        lines.append(f"| {n} | {row['step'] / 1e3:,.1f}k | {cells} | {100 * once / row['step']:.0f}% |")
+    return "\n".join(lines)
+
+
 def wall(prefixes, n, repeats, workdir):
     script = os.path.join(workdir, "child.py")
     with open(script, "w") as f:
@@ -197,7 +268,16 @@ def main():
     parser.add_argument("--output", default=None, help="write the markdown table here too")
     parser.add_argument("--wall", type=int, default=0, metavar="R",
                         help="time pfvi against --baseline instead (interleaved, best of R)")
+    parser.add_argument("--phases", action="store_true", help="pfvi's step by the phases of its algorithm")
     args = parser.parse_args()
+    if args.phases:
+        if shutil.which("valgrind") is None:
+            sys.exit("step_budget: needs valgrind (apt-get install valgrind)")
+        with tempfile.TemporaryDirectory() as workdir:
+            rows = [(n, phases([sys.executable], n, STEPS[n], workdir)) for n in
+                    [int(x) for x in args.sizes.split(",")]]
+        print(phase_table(rows))
+        return
     if args.wall:
         if not args.baseline:
             sys.exit("step_budget: --wall needs --baseline")
