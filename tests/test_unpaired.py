@@ -273,6 +273,38 @@ def test_a_smooth_force_is_not_counted_unresolved(stages, epsilon, most):
     assert abs(sim.particles[0].vy - SLAB_W * math.sqrt(math.pi)) < max(1e3 * epsilon, 1e-13)
 
 
+def test_a_uniform_field_does_not_let_the_steps_leap_a_slab():
+    # A uniform field gives the same force at every stage, whose top-degree
+    # sum reads the rounding of the weights' sum, not 0: the steps doubled
+    # past sim.dt without bound (122.5 after 9 steps) and leapt a slab at
+    # x = 200, silently (a hostile trial). Free motion now: 536 steps, the
+    # push within 1e-12 of the exact one.
+    import numpy as np
+    g = 1e-3
+    sim = rebound.Simulation()
+    sim.gravity = "none"
+    sim.add(m=0.0, x=0.0, vx=1.0)
+
+    def field(simp):
+        p = simp.contents.particles[0]
+        p.ax += g
+        q2 = ((p.x - 200.0) / SLAB_W) ** 2
+        if q2 < 1.0:
+            p.ay += slab_profile("smooth", q2)
+
+    KEPT.append(field)
+    sim.additional_forces = field
+    sim.dt = 0.5
+    sim.integrator = "pfvi"
+    sim.integrate(250.0)
+    # The push over the slab, dt = dx/v_x with v_x = (1 + 2 g x)^1/2.
+    q, w = np.polynomial.legendre.leggauss(200)
+    exact = SLAB_W * float(sum(wk * slab_profile("smooth", qk * qk) / math.sqrt(1.0 + 2.0 * g * (200.0 + SLAB_W * qk))
+                               for qk, wk in zip(q, w)))
+    assert abs(sim.particles[0].vy - exact) < 1e-12
+    assert sim.dt == 0.5
+
+
 def test_free_motion_grows_back_from_an_archive_as_in_one_call(tmp_path):
     # The longest free step is saved: a run restarted while its steps grow
     # back after the slab ends on one call's bits and steps.

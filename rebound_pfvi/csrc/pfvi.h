@@ -1554,6 +1554,7 @@ struct pfvi_resolution {
     double ratio;
     size_t particle;    // SIZE_MAX: none
     double own;         // the largest ratio without the motion floor
+    int varies;         // with a motion floor: whether any body's stage accelerations differ
 };
 PFVI_INTERNAL struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, const struct pfvi_state* st,
         size_t N, double h, const struct pfvi_field* field, double pull_above, int residual, double motion);

@@ -819,6 +819,14 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
                 constants->epsilon_effective);
             u = pow(factorial(s - 1)*res.ratio, 1./(s - 1.));
             u_own = pow(factorial(s - 1)*res.own, 1./(s - 1.));
+            if (!res.varies){
+                // The same force at every stage (a uniform field) reads the
+                // rounding of the weights' sum, not 0: it is free motion.
+                // (Else u at that rounding, far below the aim, doubled the
+                // steps without bound: 122.5 after 9 steps in a field of
+                // 1e-3, and a slab at x = 200 was leapt; a hostile trial.)
+                u = u_own = 0.;
+            }
             if (!st->unpaired_retaken && retakes == 0 && u_own > PFVI_UNPAIRED_RETAKE*u_aim){
                 // Resolved against the motion only after a retake, of this
                 // step or the one before (the steps are closing in on an

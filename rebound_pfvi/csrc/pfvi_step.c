@@ -265,7 +265,7 @@ struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, con
     const int s = st->options.stages;
     const double* const weights = (s == 2) ? two_point : st->rule.lagrange;
     const double* const nodes = (s == 2) ? two_point_nodes : st->rule.c;
-    struct pfvi_resolution worst = {0., SIZE_MAX, 0.};
+    struct pfvi_resolution worst = {0., SIZE_MAX, 0., 0};
     for (size_t i=0; i<N; i++){
         double a[PFVI_STAGES_MAX][3], f[PFVI_STAGES_MAX][3];
         scheme->stage_accelerations(r, st, i, a);
@@ -301,6 +301,10 @@ struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, con
             ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, pull2);
         }
         worst.own = (ratio > worst.own || ratio != ratio) ? ratio : worst.own;
+        for (int k=1; motion > 0. && !worst.varies && k<s; k++){
+            // (!=: a NaN varies too)
+            worst.varies = (a[k][0] != a[0][0]) | (a[k][1] != a[0][1]) | (a[k][2] != a[0][2]);
+        }
         if (motion > 0. && ratio > pull_above){
             // An acceleration that vanishes where a force region ends goes
             // as a power of the distance to its edge, so against itself a
