@@ -166,19 +166,16 @@ def test_a_body_leaves_a_force_that_vanishes_at_its_edge(kind):
     assert sim.dt == 0.5
 
 
-def test_a_force_too_weak_to_matter_does_not_let_the_steps_leap_a_slab():
-    # Judged against the motion, a background of 1e-12 sin x is resolved at
-    # any step: grown without bound, the steps reached 7.8 and leapt the
-    # slab at x = 200 (its whole push missed; a hostile trial). They grow
-    # no further than the background's own scale, or free motion, allows:
-    # 360 steps, 5.1e-11 off (the build before: 389, 5.1e-11).
+def a_slab_far_behind(background):
+    """One free body (gravity off, sim.dt = 0.5) pushed along x by
+    background(x) on its way to a C1 slab at x = 200 that pushes it along y."""
     sim = rebound.Simulation()
     sim.gravity = "none"
     sim.add(m=0.0, x=0.0, vx=1.0)
 
     def forces(simp):
         p = simp.contents.particles[0]
-        p.ax += 1e-12 * math.sin(p.x)
+        p.ax += background(p.x)
         q2 = ((p.x - 200.0) / SLAB_W) ** 2
         if q2 < 1.0:
             p.ay += slab_profile("smooth", q2)
@@ -187,16 +184,24 @@ def test_a_force_too_weak_to_matter_does_not_let_the_steps_leap_a_slab():
     sim.additional_forces = forces
     sim.dt = 0.5
     sim.integrator = "pfvi"
+    return sim
+
+
+def test_a_force_too_weak_to_matter_does_not_let_the_steps_leap_a_slab():
+    # Judged against the motion, a background of 1e-12 sin x is resolved at
+    # any step: grown without bound, the steps reached 7.8 and leapt the
+    # slab at x = 200 (its whole push missed; a hostile trial). They grow
+    # no further than the background's own scale, or free motion, allows:
+    # 360 steps, 5.1e-11 off (the build before: 389, 5.1e-11).
+    sim = a_slab_far_behind(lambda x: 1e-12 * math.sin(x))
     sim.integrate(400.0)
     assert abs(sim.particles[0].vy - slab_impulse("smooth") / sim.particles[0].vx) < 1e-9
     assert sim.integrator.n_steps < 1000
 
 
-def test_a_first_step_that_caught_only_a_tail_does_not_leap_the_force():
-    # sim.dt = 100 from 10 before a Gaussian slab: the first trial's stages
-    # see only its tail, far below the motion; judged against the motion it
-    # leapt the slab (0.35 off; a hostile trial). The motion is a measure
-    # only after a retake: 446 steps, 4e-15 off (the build before: 1413).
+def through_a_gaussian(dt):
+    """One free body (gravity off) crossing a Gaussian slab that pushes it
+    along y: in all, W sqrt(pi) at unit speed."""
     sim = rebound.Simulation()
     sim.gravity = "none"
     sim.add(m=0.0, x=0.0, vx=1.0)
@@ -207,8 +212,17 @@ def test_a_first_step_that_caught_only_a_tail_does_not_leap_the_force():
 
     KEPT.append(gauss)
     sim.additional_forces = gauss
-    sim.dt = 100.0
+    sim.dt = dt
     sim.integrator = "pfvi"
+    return sim
+
+
+def test_a_first_step_that_caught_only_a_tail_does_not_leap_the_force():
+    # sim.dt = 100 from 10 before a Gaussian slab: the first trial's stages
+    # see only its tail, far below the motion; judged against the motion it
+    # leapt the slab (0.35 off; a hostile trial). The motion is a measure
+    # only after a retake: 446 steps, 4e-15 off (the build before: 1413).
+    sim = through_a_gaussian(100.0)
     sim.integrate(20.0)
     assert abs(sim.particles[0].vy - SLAB_W * math.sqrt(math.pi)) < 1e-9
 
@@ -252,18 +266,7 @@ def test_a_smooth_force_is_not_counted_unresolved(stages, epsilon, most):
     # force grows, which the shortcut above took for a jump's (n_unresolved
     # 205 at s = 4 and epsilon 1e-6, 521 at s = 5 and 1e-12, each warned
     # "forces that jump"; a hostile trial). Now 1 and 8, in the far tail.
-    sim = rebound.Simulation()
-    sim.gravity = "none"
-    sim.add(m=0.0, x=0.0, vx=1.0)
-
-    def gauss(simp):
-        p = simp.contents.particles[0]
-        p.ay += math.exp(-(((p.x - SLAB_X) / SLAB_W) ** 2))
-
-    KEPT.append(gauss)
-    sim.additional_forces = gauss
-    sim.dt = 0.5
-    sim.integrator = "pfvi"
+    sim = through_a_gaussian(0.5)
     sim.integrator.stages = stages
     sim.integrator.epsilon = epsilon
     with warnings.catch_warnings():
@@ -281,21 +284,7 @@ def test_a_uniform_field_does_not_let_the_steps_leap_a_slab():
     # push within 1e-12 of the exact one.
     import numpy as np
     g = 1e-3
-    sim = rebound.Simulation()
-    sim.gravity = "none"
-    sim.add(m=0.0, x=0.0, vx=1.0)
-
-    def field(simp):
-        p = simp.contents.particles[0]
-        p.ax += g
-        q2 = ((p.x - 200.0) / SLAB_W) ** 2
-        if q2 < 1.0:
-            p.ay += slab_profile("smooth", q2)
-
-    KEPT.append(field)
-    sim.additional_forces = field
-    sim.dt = 0.5
-    sim.integrator = "pfvi"
+    sim = a_slab_far_behind(lambda x: g)
     sim.integrate(250.0)
     # The push over the slab, dt = dx/v_x with v_x = (1 + 2 g x)^1/2.
     q, w = np.polynomial.legendre.leggauss(200)
