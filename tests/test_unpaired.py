@@ -227,55 +227,6 @@ def test_a_first_step_that_caught_only_a_tail_does_not_leap_the_force():
     assert abs(sim.particles[0].vy - SLAB_W * math.sqrt(math.pi)) < 1e-9
 
 
-def test_a_slab_at_tight_epsilon_is_not_kept_unresolved_at_first_trials():
-    # The shortcut that keeps a coarse first trial unresolved after steps
-    # that left a jump behind counted steps low against the motion too: the
-    # approach to a slab at s = 7 and epsilon 1e-12 was taken as a jump's,
-    # and the body ended 6.2e-9 off the exact push (a hostile trial). Low
-    # against the force's own scale: 2.7e-11.
-    sim = through_a_slab("smooth")
-    sim.integrator.stages = 7
-    sim.integrator.epsilon = 1e-12
-    sim.integrate(16.0)
-    impulse = slab_impulse("smooth")
-    assert abs(sim.particles[0].vy - impulse / 1.0) < 1e-10
-    assert abs(sim.particles[1].vy - (0.1 + impulse / 1.3)) < 1e-10
-
-
-def test_a_low_order_step_at_an_edge_does_not_end_at_ts_rounding():
-    # At s = 3 the C1 slab's edges are resolved by no step above t's
-    # rounding: the step was kept there, unresolved, and the next one
-    # proposed below the rounding, which refused the run ("the step dt =
-    # 7e-16 does not change t" at t = 10.2; a hostile trial). Proposed at
-    # twice the kept step for up to 5 such steps in a row: 1824 steps,
-    # both bodies within 4e-8 of the exact push, warned as unresolved.
-    sim = through_a_slab("smooth")
-    sim.integrator.stages = 3
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        sim.integrate(16.0)
-    impulse = slab_impulse("smooth")
-    assert abs(sim.particles[0].vy - impulse / 1.0) < 1e-7
-    assert abs(sim.particles[1].vy - (0.1 + impulse / 1.3)) < 1e-7
-    assert sim.integrator.n_unresolved > 0
-
-
-@pytest.mark.parametrize("stages, epsilon, most", [(4, 1e-6, 1), (5, 1e-12, 8)])
-def test_a_smooth_force_is_not_counted_unresolved(stages, epsilon, most):
-    # A Gaussian is smooth: the steps through its tails are retaken as the
-    # force grows, which the shortcut above took for a jump's (n_unresolved
-    # 205 at s = 4 and epsilon 1e-6, 521 at s = 5 and 1e-12, each warned
-    # "forces that jump"; a hostile trial). Now 1 and 8, in the far tail.
-    sim = through_a_gaussian(0.5)
-    sim.integrator.stages = stages
-    sim.integrator.epsilon = epsilon
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        sim.integrate(20.0)
-    assert sim.integrator.n_unresolved <= most
-    assert abs(sim.particles[0].vy - SLAB_W * math.sqrt(math.pi)) < max(1e3 * epsilon, 1e-13)
-
-
 def test_a_uniform_field_does_not_let_the_steps_leap_a_slab():
     # A uniform field gives the same force at every stage, whose top-degree
     # sum reads the rounding of the weights' sum, not 0: the steps doubled
@@ -292,6 +243,40 @@ def test_a_uniform_field_does_not_let_the_steps_leap_a_slab():
                                for qk, wk in zip(q, w)))
     assert abs(sim.particles[0].vy - exact) < 1e-12
     assert sim.dt == 0.5
+
+
+def test_compact_bumps_one_after_another_are_resolved():
+    # Six C-infinity bumps 0.7 apart at s = 5, epsilon 1e-10: a change that
+    # judged the jump shortcut's count against the force's own scale let the
+    # count carry over the free motion between bumps, and coarse first
+    # trials kept at the next bumps left 1.3e-5 (a hostile trial). As it
+    # is: 5.6e-13.
+    import numpy as np
+    centres = [10.0 + 0.7 * k for k in range(6)]
+    width = 0.15
+    sim = rebound.Simulation()
+    sim.gravity = "none"
+    sim.add(m=0.0, x=0.0, vx=1.0)
+
+    def bumps(simp):
+        p = simp.contents.particles[0]
+        for c in centres:
+            q2 = ((p.x - c) / width) ** 2
+            if q2 < 1.0:
+                p.ay += 2.0 * math.exp(-1.0 / (1.0 - q2))
+
+    KEPT.append(bumps)
+    sim.additional_forces = bumps
+    sim.dt = 0.1
+    sim.integrator = "pfvi"
+    sim.integrator.stages = 5
+    sim.integrator.epsilon = 1e-10
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sim.integrate(20.0)
+    q, w = np.polynomial.legendre.leggauss(200)
+    exact = len(centres) * 2.0 * width * float(sum(wk * math.exp(-1.0 / (1.0 - qk * qk)) for qk, wk in zip(q, w)))
+    assert abs(sim.particles[0].vy - exact) < 1e-11
 
 
 def test_free_motion_grows_back_from_an_archive_as_in_one_call(tmp_path):

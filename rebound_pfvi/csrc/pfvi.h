@@ -1079,9 +1079,6 @@ struct pfvi_state {
     // Without pairs: whether the last step was retaken (the stages may then
     // be judged against the motion too: pfvi_control.c; saved).
     int unpaired_retaken;
-    // Without pairs: consecutive steps kept because a retake would be below
-    // t's rounding (pfvi_control.c; saved).
-    int unpaired_rounding;
 
     // Scratch
     size_t N_allocated;

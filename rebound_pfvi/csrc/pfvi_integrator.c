@@ -329,7 +329,6 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_INT, "unpaired_suspect", offsetof(struct pfvi_state, unpaired_suspect), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_free", offsetof(struct pfvi_state, dt_free), 0, 0, 0 },
     { "", REB_INT, "unpaired_retaken", offsetof(struct pfvi_state, unpaired_retaken), 0, 0, 0 },
-    { "", REB_INT, "unpaired_rounding", offsetof(struct pfvi_state, unpaired_rounding), 0, 0, 0 },
     { "", REB_DOUBLE, "rho", offsetof(struct pfvi_state, rho), 0, 0, 0 },
     { "", REB_DOUBLE, "rho_sign", offsetof(struct pfvi_state, rho_sign), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_proposed", offsetof(struct pfvi_state, dt_proposed), 0, 0, 0 },
