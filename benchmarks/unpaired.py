@@ -4,7 +4,7 @@ additional_forces and on a user's own gravity (docs/adaptive.md, "Without
 pairs"). Each run's error is its largest position difference from IAS15 at
 epsilon 1e-11 after 30 time units; CPU time best of --repeats.
 
-    python -P benchmarks/unpaired.py [--repeats 3] [--workflows]
+    python -P benchmarks/unpaired.py [--repeats 3] [--workflows] [--stages]
 
 --workflows instead runs each scene as users do: epsilon 1e-6, 1e-8 and
 1e-10, one integrate() call and 37 outputs (errors against IAS15), a round
@@ -12,6 +12,13 @@ trip to 30 and back at 1e-9; and a dense sweep of a test particle in the
 Kepler potential at the defaults from REBOUND's first sim.dt (e = 0 ...
 0.99 every 0.01, four starting phases and inclinations up to retrograde,
 10 outputs over 3 orbits, then back to 0 with sim.dt flipped).
+
+--stages compares each scheme s = 2 ... 8 without pairs and with them: a
+test particle 3 orbits from pericentre and from apocentre (e = 0 ... 0.999;
+0.99 at s = 2, whose paired runs take millions of steps beyond) in the
+Kepler potential from additional_forces and about a massive body, at
+epsilon 1e-6, 1e-9 and 1e-12 (1e-6 at s = 2). The error is the distance
+from the exact start, in epsilon per orbit (a = 1).
 """
 import argparse
 import math
@@ -165,13 +172,60 @@ def workflows():
           f"largest round trip {worst_back:.1e}")
 
 
+def orbit_from(e, pericentre, paired, s, epsilon):
+    q, big_q = 1.0 - e, 1.0 + e
+    x, vy = (q, math.sqrt(big_q / q)) if pericentre else (-big_q, -math.sqrt(q / big_q))
+    sim = rebound.Simulation()
+    if paired:
+        sim.add(m=1.0)
+    else:
+        sim.gravity = "none"
+        sim.additional_forces = kepler_potential
+    sim.add(m=0.0, x=x, vy=vy)
+    sim.integrator = "pfvi"
+    sim.integrator.stages = s
+    sim.integrator.epsilon = epsilon
+    sim.dt = 0.1
+    orbits = 3
+    sim.integrate(orbits * 2 * math.pi)
+    p = sim.particles[-1]
+    return math.hypot(p.x - x, p.y, p.z) / (epsilon * orbits), sim.integrator.n_steps
+
+
+def stages():
+    print("| s | epsilon | without pairs: worst (e, start) | e = 0.99 | e = 0.999 | steps "
+          "| with a pair: worst | e = 0.99 | e = 0.999 | steps |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for s in range(2, 9):
+        eccentricities = (0.0, 0.5, 0.9, 0.99) + ((0.999,) if s > 2 else ())
+        for epsilon in ((1e-6,) if s == 2 else (1e-6, 1e-9, 1e-12)):
+            cells = []
+            for paired in (False, True):
+                worst, steps, at = (0.0, ""), 0, {}
+                for e in eccentricities:
+                    for pericentre in ((True,) if e == 0.0 else (True, False)):
+                        ratio, n = orbit_from(e, pericentre, paired, s, epsilon)
+                        steps += n
+                        at[e] = max(at.get(e, 0.0), ratio)
+                        if ratio > worst[0]:
+                            worst = (ratio, f"{e}, {'pericentre' if pericentre else 'apocentre'}")
+                cells.append(f"{worst[0]:.2g} ({worst[1]}) | {at[0.99]:.2g} | "
+                             f"{at[0.999]:.2g} | {steps}" if 0.999 in at else
+                             f"{worst[0]:.2g} ({worst[1]}) | {at[0.99]:.2g} | - | {steps}")
+            print(f"| {s} | {epsilon:g} | " + " | ".join(cells) + " |", flush=True)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--workflows", action="store_true")
+    parser.add_argument("--stages", action="store_true")
     args = parser.parse_args(argv)
     if args.workflows:
         workflows()
+        return
+    if args.stages:
+        stages()
         return
     print("| scene | integrator | epsilon | error | steps | CPU time (ms) |")
     print("|---|---|---|---|---|---|")

@@ -51,6 +51,9 @@ typedef long long pfvi_lane_mask __attribute__((vector_size(4*sizeof(long long))
 // A macro's value as a string, for the field documentation.
 #define PFVI_STR_(x) #x
 #define PFVI_STR(x) PFVI_STR_(x)
+// (A list's text: PFVI_STR would read its commas as arguments.)
+#define PFVI_STR_LIST_(...) #__VA_ARGS__
+#define PFVI_STR_LIST(...) PFVI_STR_LIST_(__VA_ARGS__)
 
 // Name under which the integrator is registered with REBOUND. Lower case:
 // REBOUND's Python setter lower-cases integrator names.
@@ -267,15 +270,28 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 #define PFVI_RESOLUTION_RETRIES 5
 #define PFVI_RESOLUTION_SLACK 2.0
 // Without pairs (no density to track: pfvi_control.c, control_unpaired)
-// each step's resolution u is aimed at AIM kappa (a circular orbit's steps
-// under the density have u = kappa), proposed SAFETY times below that, and
-// a step above RETAKE times the aim is retaken. Measured on test particles
-// in a Kepler potential from additional_forces (e = 0 ... 0.99, epsilon
-// 1e-6 ... 1e-10; tests/test_unpaired.py): AIM 1 took 1.3-2.5 times the
-// steps of the same orbits about a massive body, for errors 1e3 times
-// smaller; 1.4 with RETAKE 1.25 ends within the paired runs' errors; 1.8
-// left e = 0.99 from pericentre 5e-7 off at epsilon 1e-7 and 1e-8 alike.
-#define PFVI_UNPAIRED_AIM 1.4
+// each step's resolution u is aimed at AIMS_s kappa for s stages (a circular
+// orbit's steps under the density have u = kappa), proposed SAFETY times
+// below that, and a step above RETAKE times the aim is retaken. Measured on
+// test particles in a Kepler potential from additional_forces (e = 0 ...
+// 0.99, epsilon 1e-6 ... 1e-10, s = 8; tests/test_unpaired.py): an aim of 1
+// took 1.3-2.5 times the steps of the same orbits about a massive body, for
+// errors 1e3 times smaller; 1.4 with RETAKE 1.25 ends within the paired
+// runs' errors; 1.8 left e = 0.99 from pericentre 5e-7 off at epsilon 1e-7
+// and 1e-8 alike. Fewer stages see less of a pericentre passage in their
+// top coefficient (degree s - 1). 3 orbits from pericentre and apocentre,
+// e = 0 ... 0.999, epsilon 1e-6, 1e-9 and 1e-12 (benchmarks/unpaired.py
+// --stages, 2026-11-28): at 1.4, e = 0.99 ended 7 epsilon per orbit off at
+// s = 2 and 64-88 at s = 3, where the paired runs end within 1 and 0.6;
+// 0.55 and 0.45 bring them to 1 and 0.9-1.1, in 2.5 and 3.1 times the
+// steps, still fewer than the paired runs take. s = 4 and 5 stay at 1.4
+// (e = 0.99 15-19 epsilon per orbit off at 1e-6, 1.4-5.4 at 1e-9, about 1
+// at 1e-12): 0.8 and 0.9 brought them within the paired runs' errors, but
+// left six C-infinity bumps at s = 5 5.1e-9 off instead of 5.3e-13
+// (tests/test_unpaired.py) and a polynomial edge at s = 4, 1e-12 refused at
+// t's rounding where 1.4 crosses it (docs/adaptive.md).
+#define PFVI_UNPAIRED_AIMS_2_TO_8 0.55, 0.45, 1.4, 1.4, 1.4, 1.4, 1.4
+#define PFVI_UNPAIRED_AIMS {0., 0., PFVI_UNPAIRED_AIMS_2_TO_8}
 #define PFVI_UNPAIRED_SAFETY 0.9
 #define PFVI_UNPAIRED_RETAKE 1.25
 // A retake that lowered u below this fraction of the last is still helping.

@@ -756,7 +756,7 @@ static double unpaired_time_scale(const struct reb_simulation* r, const struct p
 // step is then sized by its own stages: their resolution u (h times the
 // rate their forces vary at, the resolution check's measure; of a fitted
 // step, of the force its fitted path does not carry) is aimed at
-// PFVI_UNPAIRED_AIM kappa, as an explicit method's embedded estimate steers
+// PFVI_UNPAIRED_AIMS[s] kappa, as an explicit method's embedded estimate steers
 // it; not time-symmetric (n_asymmetric). A step above PFVI_UNPAIRED_RETAKE
 // times the aim is retaken shorter, one whose solve does not converge at
 // half (each counted in n_rejected). Forces that do not vary over a step
@@ -767,7 +767,8 @@ static double unpaired_time_scale(const struct reb_simulation* r, const struct p
 static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
         double sign, const struct pfvi_symmetric_constants* constants){
     const int s = st->options.stages;
-    const double u_aim = PFVI_UNPAIRED_AIM*constants->kappa;
+    static const double aim[PFVI_STAGES_MAX + 1] = PFVI_UNPAIRED_AIMS;
+    const double u_aim = aim[s]*constants->kappa;
     // An output time does not cap the step (pfvi_output.c shows it), as on
     // the symmetric track: the step is the one this run proposed.
     const int output = st->output_uncapped && st->dt_proposed != 0.;
