@@ -259,12 +259,15 @@ def test_a_uniform_field_does_not_let_the_steps_leap_a_slab():
     assert sim.dt == 0.5
 
 
-def test_compact_bumps_one_after_another_are_resolved():
-    # Six C-infinity bumps 0.7 apart at s = 5, epsilon 1e-10: a change that
-    # judged the jump shortcut's count against the force's own scale let the
-    # count carry over the free motion between bumps, and coarse first
-    # trials kept at the next bumps left 1.3e-5 (a hostile trial). As it
-    # is: 5.6e-13.
+@pytest.mark.parametrize("stages", [4, 5, 7])
+def test_compact_bumps_one_after_another_are_resolved(stages):
+    # Six C-infinity bumps 0.7 apart, epsilon 1e-10: where the jump
+    # shortcut's count carried over the free motion between bumps, the
+    # first coarse trial at the next bump was kept unresolved at once: 1e-3
+    # off at s = 4 and 3.7e-5 at s = 7 (and, with the count judged against
+    # the force's own scale, 1.3e-5 at s = 5; hostile trials). Free motion
+    # back at the run's free step now ends the count: 1.9e-12, 6e-13 and
+    # 3.3e-15.
     import numpy as np
     centres = [10.0 + 0.7 * k for k in range(6)]
     width = 0.15
@@ -283,7 +286,7 @@ def test_compact_bumps_one_after_another_are_resolved():
     sim.additional_forces = bumps
     sim.dt = 0.1
     sim.integrator = "pfvi"
-    sim.integrator.stages = 5
+    sim.integrator.stages = stages
     sim.integrator.epsilon = 1e-10
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
