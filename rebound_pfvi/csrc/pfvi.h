@@ -287,9 +287,8 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // steps, still fewer than the paired runs take. s = 4 and 5 stay at 1.4
 // (e = 0.99 15-19 epsilon per orbit off at 1e-6, 1.4-5.4 at 1e-9, about 1
 // at 1e-12): 0.8 and 0.9 brought them within the paired runs' errors, but
-// left six C-infinity bumps at s = 5 5.1e-9 off instead of 5.3e-13
-// (tests/test_unpaired.py) and a polynomial edge at s = 4, 1e-12 refused at
-// t's rounding where 1.4 crosses it (docs/adaptive.md).
+// left three bodies through four C-infinity bumps at s = 4, epsilon 1e-10
+// 5.8e-4 off against 1.2e-12 at 1.4 (docs/adaptive.md).
 #define PFVI_UNPAIRED_AIMS_2_TO_8 0.55, 0.45, 1.4, 1.4, 1.4, 1.4, 1.4
 #define PFVI_UNPAIRED_AIMS {0., 0., PFVI_UNPAIRED_AIMS_2_TO_8}
 #define PFVI_UNPAIRED_SAFETY 0.9
