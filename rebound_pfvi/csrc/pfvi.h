@@ -1087,6 +1087,9 @@ struct pfvi_state {
     // reached what made the first trial coarse (pfvi_control.c,
     // control_unpaired; saved).
     int unpaired_suspect;
+    // Without pairs: the last step that count holds; a first trial kept at
+    // once for the count is at most twice it (pfvi_control.c; saved).
+    double dt_suspect;
     // Without pairs: the longest step taken where no force varied (u = 0)
     // and none was retaken, or the run's first sim.dt if longer, which free
     // motion grows back to (saved).

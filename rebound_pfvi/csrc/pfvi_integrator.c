@@ -327,6 +327,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         offsetof(struct pfvi_state, var_predictor_N), sizeof(*((struct pfvi_state*)0)->var_predictor_x), 0 },
     { "", REB_DOUBLE, "dt_reversible", offsetof(struct pfvi_state, dt_reversible), 0, 0, 0 },
     { "", REB_INT, "unpaired_suspect", offsetof(struct pfvi_state, unpaired_suspect), 0, 0, 0 },
+    { "", REB_DOUBLE, "dt_suspect", offsetof(struct pfvi_state, dt_suspect), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_free", offsetof(struct pfvi_state, dt_free), 0, 0, 0 },
     { "", REB_INT, "unpaired_retaken", offsetof(struct pfvi_state, unpaired_retaken), 0, 0, 0 },
     { "", REB_DOUBLE, "rho", offsetof(struct pfvi_state, rho), 0, 0, 0 },
