@@ -4,7 +4,7 @@ additional_forces and on a user's own gravity (docs/adaptive.md, "Without
 pairs"). Each run's error is its largest position difference from IAS15 at
 epsilon 1e-11 after 30 time units; CPU time best of --repeats.
 
-    python -P benchmarks/unpaired.py [--repeats 3] [--workflows] [--stages]
+    python -P benchmarks/unpaired.py [--repeats 3] [--workflows] [--stages] [--edges]
 
 --workflows instead runs each scene as users do: epsilon 1e-6, 1e-8 and
 1e-10, one integrate() call and 37 outputs (errors against IAS15), a round
@@ -19,6 +19,14 @@ test particle 3 orbits from pericentre and from apocentre (e = 0 ... 0.999;
 Kepler potential from additional_forces and about a massive body, at
 epsilon 1e-6, 1e-9 and 1e-12 (1e-6 at s = 2). The error is the distance
 from the exact start, in epsilon per orbit (a = 1).
+
+--edges sends one body through a slab that pushes it across its path,
+2 (1 - q^2)^p (p = 1, 2, 3) or the C-infinity bump 2 exp(-1/(1 - q^2)), in
+12 variants each (width, position and speed a little apart, so that the
+steps meet the edges at different places), at s = 4, 5, 6, 8 and epsilon
+1e-6, 1e-9, 1e-12 (576 runs, about 3 minutes): how many are refused (the
+steps crept onto an edge until t's rounding) and the largest error of the
+rest against the exact push.
 """
 import argparse
 import math
@@ -215,12 +223,67 @@ def stages():
             print(f"| {s} | {epsilon:g} | " + " | ".join(cells) + " |", flush=True)
 
 
+def slab_edge_run(power, stages, epsilon, k):
+    """One body through slab variant k; (error against the exact push, steps), or None if refused."""
+    width, centre, speed = 0.2 * (1 + 0.013 * k), 10.0 + 0.037 * k, 1.0 + 0.011 * k
+
+    def push(simp):
+        for p in simp.contents.particles:
+            q = (p.x - centre) / width
+            if abs(q) < 1.0:
+                p.ay += 2.0 * (math.exp(-1.0 / (1.0 - q * q)) if power is None else (1.0 - q * q) ** power)
+
+    sim = rebound.Simulation()
+    sim.gravity = "none"
+    sim.add(m=0.0, x=0.0, vx=speed)
+    sim.additional_forces = push
+    sim.dt = 0.5
+    sim.integrator = "pfvi"
+    sim.integrator.stages = stages
+    sim.integrator.epsilon = epsilon
+    try:
+        sim.integrate(20.0)
+    except RuntimeError:
+        return None
+    if power is None:
+        import numpy as np
+        q, w = np.polynomial.legendre.leggauss(200)
+        integral = float(sum(wk * math.exp(-1.0 / (1.0 - qk * qk)) for qk, wk in zip(q, w)))
+    else:
+        integral = {1: 4.0 / 3.0, 2: 16.0 / 15.0, 3: 32.0 / 35.0}[power]   # of (1 - q^2)^p over (-1, 1)
+    return abs(sim.particles[0].vy - 2.0 * width * integral / speed), sim.integrator.n_steps
+
+
+def edges():
+    import warnings
+    print("| profile | s | epsilon | refused (of 12) | largest error of the rest | steps |")
+    print("|---|---|---|---|---|---|")
+    refused_all = 0
+    for power in (1, 2, 3, None):
+        for stages in (4, 5, 6, 8):
+            for epsilon in (1e-6, 1e-9, 1e-12):
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    runs = [slab_edge_run(power, stages, epsilon, k) for k in range(12)]
+                done = [r for r in runs if r is not None]
+                refused_all += len(runs) - len(done)
+                name = "bump" if power is None else f"(1 - q^2)^{power}"
+                worst = max((r[0] for r in done), default=float("nan"))
+                print(f"| {name} | {stages} | {epsilon:g} | {len(runs) - len(done)} | {worst:.1e} | "
+                      f"{sum(r[1] for r in done)} |", flush=True)
+    print(f"\nRefused: {refused_all} of 576 runs")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--workflows", action="store_true")
     parser.add_argument("--stages", action="store_true")
+    parser.add_argument("--edges", action="store_true")
     args = parser.parse_args(argv)
+    if args.edges:
+        edges()
+        return
     if args.workflows:
         workflows()
         return

@@ -284,12 +284,14 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // --stages, 2026-11-28): at 1.4, e = 0.99 ended 7 epsilon per orbit off at
 // s = 2 and 64-88 at s = 3, where the paired runs end within 1 and 0.6;
 // 0.55 and 0.45 bring them to 1 and 0.9-1.1, in 2.5 and 3.1 times the
-// steps, still fewer than the paired runs take. s = 4 and 5 stay at 1.4
-// (e = 0.99 15-19 epsilon per orbit off at 1e-6, 1.4-5.4 at 1e-9, about 1
-// at 1e-12): 0.8 and 0.9 brought them within the paired runs' errors, but
-// left three bodies through four C-infinity bumps at s = 4, epsilon 1e-10
-// 5.8e-4 off against 1.2e-12 at 1.4 (docs/adaptive.md).
-#define PFVI_UNPAIRED_AIMS_2_TO_8 0.55, 0.45, 1.4, 1.4, 1.4, 1.4, 1.4
+// steps, still fewer than the paired runs take. At s = 4 and 5, 1.4 left
+// e = 0.99 15-19 epsilon per orbit off at 1e-6 (1.4-5.4 at 1e-9), and C-infinity
+// bumps were kept unresolved thousands of times (the stages' u stopped
+// falling with the step); 0.8 and 1.0 bring e = 0.99 to 0.41 and 0.36
+// (e = 0.999: 11 and 9.7) in 1.8 and 1.4 times the steps, and the bumps'
+// unresolved steps from 8452 to 88 (three bodies, four bumps, s = 4,
+// epsilon 1e-10; docs/adaptive.md).
+#define PFVI_UNPAIRED_AIMS_2_TO_8 0.55, 0.45, 0.8, 1.0, 1.4, 1.4, 1.4
 #define PFVI_UNPAIRED_AIMS {0., 0., PFVI_UNPAIRED_AIMS_2_TO_8}
 #define PFVI_UNPAIRED_SAFETY 0.9
 #define PFVI_UNPAIRED_RETAKE 1.25
@@ -1090,6 +1092,9 @@ struct pfvi_state {
     // Without pairs: the last step that count holds; a first trial kept at
     // once for the count is at most twice it (pfvi_control.c; saved).
     double dt_suspect;
+    // Without pairs: 1 + the index of the body whose retakes that count
+    // holds (0: none); the shortcut keeps only a trial worst at that body (saved).
+    int suspect_body;
     // Without pairs: the longest step taken where no force varied (u = 0)
     // and none was retaken, or the run's first sim.dt if longer, which free
     // motion grows back to (saved).
@@ -1097,6 +1102,9 @@ struct pfvi_state {
     // Without pairs: whether the last step was retaken (the stages may then
     // be judged against the motion too: pfvi_control.c; saved).
     int unpaired_retaken;
+    // Without pairs: consecutive steps retaken for their force's own
+    // resolution and kept as resolved against the motion (pfvi_control.c; saved).
+    int unpaired_crawl;
 
     // Scratch
     size_t N_allocated;

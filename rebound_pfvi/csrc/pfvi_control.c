@@ -800,6 +800,8 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
         h = (tau > 0. && h > tau) ? tau : h;
     }
     int retakes = 0, unresolved = 0;
+    size_t first_particle = SIZE_MAX;   // the body the first trial resolved worst
+    int own_fired = 0;                  // the first trial retaken for its force's own resolution
     double u_own = 0.;
     struct pfvi_field field;
     for (;;){
@@ -828,7 +830,9 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
                 // 1e-3, and a slab at x = 200 was leapt; a hostile trial.)
                 u = u_own = 0.;
             }
-            if (!st->unpaired_retaken && retakes == 0 && u_own > PFVI_UNPAIRED_RETAKE*u_aim){
+            if (!st->unpaired_retaken && retakes == 0 && u_own > PFVI_UNPAIRED_RETAKE*u_aim
+                    && st->unpaired_crawl < PFVI_RESOLUTION_RETRIES){
+                own_fired = 1;
                 // Resolved against the motion only after a retake, of this
                 // step or the one before (the steps are closing in on an
                 // edge): a first trial whose stages caught only a tail of a
@@ -848,9 +852,13 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
             h_next = h*fmax(PFVI_CONTROL_SHRINK_MIN, fmin(0.5, u_aim/u));
             unresolved = coarse && ((retakes >= PFVI_RESOLUTION_RETRIES && !helping)
                 || retakes >= PFVI_CONTROL_MAX_REJECTIONS
-                || (retakes == 0 && st->unpaired_suspect >= PFVI_RESOLUTION_RETRIES && h <= PFVI_CONTROL_GROW_MAX*st->dt_suspect)
+                || (retakes == 0 && st->unpaired_suspect >= PFVI_RESOLUTION_RETRIES && h <= PFVI_CONTROL_GROW_MAX*st->dt_suspect
+                    && res.particle + 1 == (size_t)st->suspect_body)
                 || t0 + sign*h_next == t0);
             u_last = u;
+            if (retakes == 0){
+                first_particle = res.particle;
+            }
             if (!coarse || unresolved){
                 break;
             }
@@ -876,6 +884,17 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
     // (Counted over the steps in between too, which the proposal keeps as
     // short: a step that resolves its forces near the aim ends the count.)
     st->unpaired_retaken = (retakes > 0);
+    // A step retaken for its force's own resolution and then kept as
+    // resolved against the motion (u below PFVI_UNPAIRED_SUSPECT of the
+    // aim), again and again, is a crawl to where a force vanishes (a slab's
+    // far edge, (1 - q^2)^2: each step sized by the distance left, so t
+    // converged on the edge and the run was refused at t's rounding, s = 4,
+    // epsilon 1e-12). After PFVI_RESOLUTION_RETRIES of them that retake
+    // rests until the force is resolved against its own scale or felt.
+    {
+        const int against_motion = u < PFVI_UNPAIRED_SUSPECT*u_aim && u_own > PFVI_UNPAIRED_RETAKE*u_aim;
+        st->unpaired_crawl = !against_motion ? 0 : st->unpaired_crawl + own_fired;
+    }
     // (Judged against the motion too, u after a retake, a Gaussian's far
     // tail reads low at any step, so that the retakes of its approach count
     // as a jump's: 205 steps warned unresolved at s = 4, epsilon 1e-6.
@@ -891,7 +910,14 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
     // bumps ended 1e-3 off at s = 4 and 3.7e-5 at s = 7, epsilon 1e-10.)
     const int low = u < PFVI_UNPAIRED_SUSPECT*u_aim;
     const int left_behind = (u == 0. && retakes == 0 && h >= st->dt_free);
-    st->unpaired_suspect = (unresolved || !low || left_behind) ? 0 : st->unpaired_suspect + (retakes > 0);
+    // The count is one body's: retakes for another body's first trial start
+    // it again at that body. (Else the retakes of one body's crawl out of a
+    // bump's far edge, counted, let another body's first coarse trial across
+    // the next bump's near edge be kept at once: three bodies through four
+    // C-infinity bumps ended 3.7e-7 off at s = 4, epsilon 1e-12.)
+    const int same_body = (first_particle != SIZE_MAX && (int)first_particle + 1 == st->suspect_body);
+    st->unpaired_suspect = (unresolved || !low || left_behind) ? 0
+        : (retakes > 0 ? (same_body ? st->unpaired_suspect + 1 : 1) : st->unpaired_suspect);
     // The shortcut keeps only a trial at most twice the last step counted:
     // an approach grows a step that fell short at most twice before its next
     // trial, and a longer trial is not the approach the count saw. (With
@@ -900,6 +926,8 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
     // region was kept unresolved at once: three bodies through four bumps
     // ended 1.8e-4 off at s = 3, epsilon 1e-6.)
     st->dt_suspect = (st->unpaired_suspect == 0) ? 0. : (retakes > 0 ? h : st->dt_suspect);
+    st->suspect_body = (st->unpaired_suspect == 0) ? 0
+        : ((retakes > 0 && first_particle != SIZE_MAX) ? (int)first_particle + 1 : st->suspect_body);
     {
         static const double constant[PFVI_STAGES_MAX + 1] = PFVI_SYMMETRIC_CONSTANTS;
         static const double resolution_constant[PFVI_STAGES_MAX + 1] = PFVI_RESOLUTION_CONSTANTS;
