@@ -321,6 +321,38 @@ def test_a_uniform_field_does_not_let_the_steps_leap_a_slab():
     assert sim.dt == 0.5
 
 
+def through_bumps(starts, bumps, stages, epsilon):
+    """Free bodies (gravity off; starts: (x, y, vx) each) through C-infinity
+    bumps 0.7 apart that push them along y; the run to t = 20 and the push
+    of one bump per unit speed across it."""
+    import numpy as np
+    centres = [10.0 + 0.7 * k for k in range(bumps)]
+    width = 0.15
+    sim = rebound.Simulation()
+    sim.gravity = "none"
+    for x, y, vx in starts:
+        sim.add(m=0.0, x=x, y=y, vx=vx)
+
+    def push(simp):
+        for p in simp.contents.particles:
+            for c in centres:
+                q2 = ((p.x - c) / width) ** 2
+                if q2 < 1.0:
+                    p.ay += 2.0 * math.exp(-1.0 / (1.0 - q2))
+
+    KEPT.append(push)
+    sim.additional_forces = push
+    sim.dt = 0.1
+    sim.integrator = "pfvi"
+    sim.integrator.stages = stages
+    sim.integrator.epsilon = epsilon
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sim.integrate(20.0)
+    q, w = np.polynomial.legendre.leggauss(200)
+    return sim, 2.0 * width * float(sum(wk * math.exp(-1.0 / (1.0 - qk * qk)) for qk, wk in zip(q, w)))
+
+
 @pytest.mark.parametrize("stages", [4, 5, 7])
 def test_compact_bumps_one_after_another_are_resolved(stages):
     # Six C-infinity bumps 0.7 apart, epsilon 1e-10: where the jump
@@ -331,32 +363,8 @@ def test_compact_bumps_one_after_another_are_resolved(stages):
     # back at the run's free step now ends the count: 3.9e-14, 4.8e-14 and
     # 3.3e-15 (with the aims of 2026-11-28's second change; 1.7e-12,
     # 6.1e-13 and 3.3e-15 before it).
-    import numpy as np
-    centres = [10.0 + 0.7 * k for k in range(6)]
-    width = 0.15
-    sim = rebound.Simulation()
-    sim.gravity = "none"
-    sim.add(m=0.0, x=0.0, vx=1.0)
-
-    def bumps(simp):
-        p = simp.contents.particles[0]
-        for c in centres:
-            q2 = ((p.x - c) / width) ** 2
-            if q2 < 1.0:
-                p.ay += 2.0 * math.exp(-1.0 / (1.0 - q2))
-
-    KEPT.append(bumps)
-    sim.additional_forces = bumps
-    sim.dt = 0.1
-    sim.integrator = "pfvi"
-    sim.integrator.stages = stages
-    sim.integrator.epsilon = 1e-10
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        sim.integrate(20.0)
-    q, w = np.polynomial.legendre.leggauss(200)
-    exact = len(centres) * 2.0 * width * float(sum(wk * math.exp(-1.0 / (1.0 - qk * qk)) for qk, wk in zip(q, w)))
-    assert abs(sim.particles[0].vy - exact) < 1e-11
+    sim, push = through_bumps([(0.0, 0.0, 1.0)], 6, stages, 1e-10)
+    assert abs(sim.particles[0].vy - 6 * push) < 1e-11
 
 
 def test_each_body_counts_its_own_approach_to_a_jump():
@@ -365,34 +373,9 @@ def test_each_body_counts_its_own_approach_to_a_jump():
     # body's crawl out of a bump's far edge, counted, let another body's
     # first coarse trial across the next bump's near edge be kept at once,
     # unresolved: 2.1e-7 off. The count is now one body's: 1.2e-12.
-    import numpy as np
-    centres = [10.0 + 0.7 * k for k in range(4)]
-    width = 0.15
-    sim = rebound.Simulation()
-    sim.gravity = "none"
+    sim, push = through_bumps([(-0.37 * k, 0.1 * k, 1.0 + 0.1 * k) for k in range(3)], 4, 5, 1e-8)
     for k in range(3):
-        sim.add(m=0.0, x=-0.37 * k, y=0.1 * k, vx=1.0 + 0.1 * k)
-
-    def bumps(simp):
-        for p in simp.contents.particles:
-            for c in centres:
-                q2 = ((p.x - c) / width) ** 2
-                if q2 < 1.0:
-                    p.ay += 2.0 * math.exp(-1.0 / (1.0 - q2))
-
-    KEPT.append(bumps)
-    sim.additional_forces = bumps
-    sim.dt = 0.1
-    sim.integrator = "pfvi"
-    sim.integrator.stages = 5
-    sim.integrator.epsilon = 1e-8
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        sim.integrate(20.0)
-    q, w = np.polynomial.legendre.leggauss(200)
-    push = len(centres) * 2.0 * width * float(sum(wk * math.exp(-1.0 / (1.0 - qk * qk)) for qk, wk in zip(q, w)))
-    for k in range(3):
-        assert abs(sim.particles[k].vy - push / (1.0 + 0.1 * k)) < 1e-10, k
+        assert abs(sim.particles[k].vy - 4 * push / (1.0 + 0.1 * k)) < 1e-10, k
 
 
 def test_free_motion_grows_back_from_an_archive_as_in_one_call(tmp_path):
