@@ -430,14 +430,15 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // Newton iterations on Kepler's equation per stage point of the two-body
 // predictor, at most (the Taylor path if it does not converge).
 #define PFVI_PREDICTOR_KEPLER_ITERATIONS 30
-// ... stopped when its correction of the universal anomaly is below this
-// (relative): the Newton rounds take the predictor's error quadratically.
-#define PFVI_PREDICTOR_KEPLER_TOLERANCE 1e-12
 // A Halley correction of at most this (relative) is the last: Halley's next
-// would be of its cube, below PFVI_PREDICTOR_KEPLER_TOLERANCE, and the
+// would be of its cube, below 1e-12, and the
 // orbit's functions are carried to the corrected anomaly by their Taylor
 // series (to its cube) instead of evaluated there again.
 #define PFVI_PREDICTOR_KEPLER_LAST 1e-4
+// Stumpff's functions c_n(x) by their series to x^6 where |x| is below this
+// (below 1e-16 relative); the predictor reaches each stage from the last by
+// the addition theorems wherever the stretch between them has |x| below it.
+#define PFVI_STUMPFF_SERIES 0.1
 
 // Contacts inside a step (pfvi_contact.c, docs/collisions.md): with
 // collisions on and a radius set, or sim.exit_min_distance set, each step

@@ -514,9 +514,9 @@ struct centre_ref {
     double gq[3], gqv[3];
 };
 
-static struct centre_ref centre_of(const struct pfvi_state* st, const struct pfvi_field* field, size_t i){
-    struct centre_ref c;
-    memset(&c, 0, sizeof(c));
+static inline __attribute__((always_inline)) struct centre_ref centre_of(const struct pfvi_state* st,
+        const struct pfvi_field* field, size_t i){
+    struct centre_ref c = {.w = 0.};
     c.p = st->newton[i].partner;
     c.q = st->newton[i].companion;
     const struct reb_vec6d* const g = &field->images[st->partners[i].image];
@@ -1107,8 +1107,8 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
 /* -------------------------------------------------- the two-body predictor */
 
 // Stumpff's functions c0 .. c3 of x = beta s^2 (beta = 2 mu/r - v^2).
-static void stumpff(double x, double c[4]){
-    if (fabs(x) < 0.1){
+static inline __attribute__((always_inline)) void stumpff(double x, double c[4]){
+    if (fabs(x) < PFVI_STUMPFF_SERIES){
         // Series to x^6: below 1e-16 relative for |x| < 0.1 (Horner in x,
         // the coefficients (-1)^k/(2k + 3)! and (-1)^k/(2k + 2)!).
         c[3] = 1./6. + x*(-1./120. + x*(1./5040. + x*(-1./362880. + x*(1./39916800.
@@ -1133,11 +1133,15 @@ static void stumpff(double x, double c[4]){
 }
 
 // The two-body orbit of (r0, v0) about mu in universal variables, kept
-// between the stages of one step (each starts from the last's anomaly).
+// between the stages of one step: each stage starts from the last point
+// drawn, its anomaly s and the functions G_n(s) = s^n c_n(beta s^2) there,
+// and reaches its own by the G's addition theorems over the short stretch
+// between them (no sine or cosine where that stretch is short).
 struct kepler_orbit_uv {
-    double r0n, eta, beta, mu;
-    double s, t;        // the universal anomaly of the last point drawn, and its time
-    double r, dr;       // the radius there and its rate d r/dt
+    double r0n, eta, beta, mu, mu_r0;
+    double s, t;                // the last point drawn: its anomaly and time
+    double G0, G1, G2, G3;      // G_n(s) there
+    double r, dr, ddr;          // the radius there, d r/ds and d^2 r/ds^2
 };
 
 static int kepler_start(const double r0[3], const double v0[3], double mu, struct kepler_orbit_uv* o){
@@ -1145,48 +1149,78 @@ static int kepler_start(const double r0[3], const double v0[3], double mu, struc
     o->eta = r0[0]*v0[0] + r0[1]*v0[1] + r0[2]*v0[2];
     o->beta = 2.*mu/o->r0n - (v0[0]*v0[0] + v0[1]*v0[1] + v0[2]*v0[2]);
     o->mu = mu;
+    o->mu_r0 = mu/o->r0n;
     o->s = 0.;
     o->t = 0.;
+    o->G0 = 1.; o->G1 = 0.; o->G2 = 0.; o->G3 = 0.;
     o->r = o->r0n;
-    o->dr = o->eta/o->r0n;
-    return o->r0n > 0. && mu > 0. && isfinite(o->beta) && isfinite(o->eta);
+    o->dr = o->eta;
+    o->ddr = mu - o->beta*o->r0n;
+    return o->r0n > 0. && mu > 0. && isfinite(o->beta) && isfinite(o->eta) && isfinite(o->mu_r0);
 }
 
-// The point t after the start: Kepler's equation r0 G1 + eta G2 + mu G3 = t
-// solved by Halley's method from the Taylor guess s + dt/r - dr dt^2/(2 r^2)
-// about the last point drawn (ds/dt = 1/r); 0 if it did not converge.
-static int kepler_drift(const double r0[3], const double v0[3], struct kepler_orbit_uv* o, double t, double r[3]){
-    const double dt = t - o->t;
-    double s = o->s + dt/o->r - 0.5*o->dr*dt*dt/(o->r*o->r);
+// G_n at the anomaly `last + d` from G_n at `last` (the addition theorems
+// of the universal functions, beta and d's own G_n), or from Stumpff's
+// functions at s = last + d where d is too long for their short series.
+static void kepler_functions(const struct kepler_orbit_uv* o, double d, double s, double G[4]){
+    const double x = o->beta*d*d;
+    if (fabs(x) < PFVI_STUMPFF_SERIES){
+        double c[4];
+        stumpff(x, c);
+        const double d2 = d*d;
+        const double g1 = d*c[1], g2 = d2*c[2], g3 = (d2*d)*c[3];
+        const double g0 = c[0];
+        G[0] = o->G0*g0 - o->beta*(o->G1*g1);
+        G[1] = o->G1*g0 + o->G0*g1;
+        G[2] = (o->G2*g0 + o->G1*g1) + g2;
+        G[3] = (o->G3 + g3) + (o->G2*g1 + o->G1*g2);
+        return;
+    }
     double c[4];
+    stumpff(o->beta*s*s, c);
+    G[0] = c[0]; G[1] = s*c[1]; G[2] = s*s*c[2]; G[3] = s*s*s*c[3];
+}
+// The point t after the start: Kepler's equation r0 G1 + eta G2 + mu G3 = t
+// solved by Halley's method from s(t)'s Taylor series to the cube about the
+// last point drawn (ds/dt = 1/r, d^2s/dt^2 = -r'/r^3, d^3s/dt^3 =
+// (3 r'^2 - r r'')/r^5, primes in s); 0 if it did not converge.
+static int kepler_drift(const double r0[3], const double v0[3], struct kepler_orbit_uv* o, double t, double r[3]){
+    const double ir = 1./o->r;
+    const double u = (t - o->t)*ir, a = o->dr*ir;
+    double d = u*(1. + u*(-0.5*a + u*((3.*a*a - o->ddr*ir)*(1./6.))));
+    const double k = o->mu - o->beta*o->r0n;
     for (int it=0; it<PFVI_PREDICTOR_KEPLER_ITERATIONS; it++){
-        stumpff(o->beta*s*s, c);
-        double G1 = s*c[1], G2 = s*s*c[2], G3 = s*s*s*c[3];
-        const double F = o->r0n*G1 + o->eta*G2 + o->mu*G3 - t;
-        const double dF = o->r0n*c[0] + o->eta*G1 + o->mu*G2;   // the radius at s
-        const double ddF = o->eta*c[0] + (o->mu - o->beta*o->r0n)*G1;
-        const double ds = F/(dF - 0.5*F*ddF/dF);
+        const double s = o->s + d;
+        double G[4];
+        kepler_functions(o, d, s, G);
+        const double F = o->r0n*G[1] + o->eta*G[2] + o->mu*G[3] - t;
+        const double dF = o->r0n*G[0] + o->eta*G[1] + o->mu*G[2];   // the radius at s
+        const double ddF = o->eta*G[0] + k*G[1];
+        const double ds = F*dF/(dF*dF - 0.5*F*ddF);
         if (!isfinite(ds)){
             return 0;
         }
         if (fabs(ds) > PFVI_PREDICTOR_KEPLER_LAST*fabs(s)){
-            s -= ds;
+            d -= ds;
             continue;
         }
-        // The last correction: G2 and G3 at s - ds by their series
-        // (G3' = G2, G2' = G1, G1' = c0, c0' = -beta G1).
-        const double ds2 = 0.5*ds*ds, ds3 = ds2*ds/3.;
-        G3 = G3 - G2*ds + G1*ds2 - c[0]*ds3;
-        G2 = G2 - G1*ds + c[0]*ds2 + o->beta*G1*ds3;
-        const double f = 1. - o->mu*G2/o->r0n, g = t - o->mu*G3;
-        for (int k=0; k<3; k++){
-            r[k] = f*r0[k] + g*v0[k];
+        // The last correction: G2 and G3 at s - ds by their series to the
+        // cube (G3' = G2, G2' = G1, G1' = G0, G0' = -beta G1); the next
+        // stage starts from s itself, whose G's are at hand, and its time.
+        const double ds2 = 0.5*ds*ds, ds3 = ds2*ds*(1./3.);
+        const double G3 = ((G[3] - G[2]*ds) + G[1]*ds2) - G[0]*ds3;
+        const double G2 = ((G[2] - G[1]*ds) + G[0]*ds2) + o->beta*G[1]*ds3;
+        const double f = 1. - o->mu_r0*G2, g = t - o->mu*G3;
+        for (int c=0; c<3; c++){
+            r[c] = f*r0[c] + g*v0[c];
         }
-        o->s = s - ds;
-        o->t = t;
-        o->r = dF - ddF*ds;
-        o->dr = ddF/dF;
-        return 1;
+        o->s = s;
+        o->t = t + F;
+        o->G0 = G[0]; o->G1 = G[1]; o->G2 = G[2]; o->G3 = G[3];
+        o->r = dF;
+        o->dr = ddF;
+        o->ddr = o->mu - o->beta*dF;
+        return dF > 0.;
     }
     return 0;
 }
@@ -1343,25 +1377,15 @@ static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, 
     double cm_drift[PFVI_STAGES_MAX][3], cm0[3], cmv[3];
     if (pair){
         double cma0[3], cma_old[PFVI_STAGES_MAX][3];
-        if (M > PFVI_MASS_TINY){
-            for (int c=0; c<3; c++){
-                cm0[c] = (pi->m*q0[c] + mp*xc0[c])/M;
-                cmv[c] = (pi->m*v0[c] + mp*vc0[c])/M;
-                cma0[c] = (pi->m*ai[c] + mp*ac0[c])/M;
-                for (int m=0; rw->extrapolated && m<s; m++){
-                    cma_old[m][c] = (pi->m*st->predictor_a[i][m][c] + mp*st->predictor_a[p][m][c])/M;
-                }
-            }
-        }else{
-            // Tiny masses: the barycentre from mass fractions (PFVI_MASS_TINY).
-            const double wi = pi->m/M, wp = mp/M;
-            for (int c=0; c<3; c++){
-                cm0[c] = wi*q0[c] + wp*xc0[c];
-                cmv[c] = wi*v0[c] + wp*vc0[c];
-                cma0[c] = wi*ai[c] + wp*ac0[c];
-                for (int m=0; rw->extrapolated && m<s; m++){
-                    cma_old[m][c] = wi*st->predictor_a[i][m][c] + wp*st->predictor_a[p][m][c];
-                }
+        // The barycentre from mass fractions (a first iterate: no division
+        // per component; and tiny masses, PFVI_MASS_TINY, need no branch).
+        const double wi = pi->m/M, wp = mp/M;
+        for (int c=0; c<3; c++){
+            cm0[c] = wi*q0[c] + wp*xc0[c];
+            cmv[c] = wi*v0[c] + wp*vc0[c];
+            cma0[c] = wi*ai[c] + wp*ac0[c];
+            for (int m=0; rw->extrapolated && m<s; m++){
+                cma_old[m][c] = wi*st->predictor_a[i][m][c] + wp*st->predictor_a[p][m][c];
             }
         }
         rest_integral(st, rw, h, cma0, (const double (*)[3])cma_old, cm_drift);
