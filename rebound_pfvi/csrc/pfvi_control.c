@@ -897,7 +897,8 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
     }
     // (Judged against the motion too, u after a retake, a Gaussian's far
     // tail reads low at any step, so that the retakes of its approach count
-    // as a jump's: 205 steps warned unresolved at s = 4, epsilon 1e-6.
+    // as a jump's: 205 steps warned unresolved at s = 4, epsilon 1e-6,
+    // before the count was one body's and the crawl rule above (3 since).
     // Judged against the force's own scale instead, the count carried over
     // the free motion between compact bumps, and a coarse first trial kept
     // at the next one left 1.3e-5 at epsilon 1e-10, s = 5; a hostile trial.
