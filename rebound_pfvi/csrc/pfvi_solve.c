@@ -1139,6 +1139,7 @@ static inline __attribute__((always_inline)) void stumpff(double x, double c[4])
 // between them (no sine or cosine where that stretch is short).
 struct kepler_orbit_uv {
     double r0n, eta, beta, mu, mu_r0;
+    double k;                   // mu - beta r0n: d^2 r/ds^2 = k G0 - beta eta G1
     double s, t;                // the last point drawn: its anomaly and time
     double G0, G1, G2, G3;      // G_n(s) there
     double r, dr, ddr;          // the radius there, d r/ds and d^2 r/ds^2
@@ -1150,12 +1151,13 @@ static int kepler_start(const double r0[3], const double v0[3], double mu, struc
     o->beta = 2.*mu/o->r0n - (v0[0]*v0[0] + v0[1]*v0[1] + v0[2]*v0[2]);
     o->mu = mu;
     o->mu_r0 = mu/o->r0n;
+    o->k = mu - o->beta*o->r0n;
     o->s = 0.;
     o->t = 0.;
     o->G0 = 1.; o->G1 = 0.; o->G2 = 0.; o->G3 = 0.;
     o->r = o->r0n;
     o->dr = o->eta;
-    o->ddr = mu - o->beta*o->r0n;
+    o->ddr = o->k;
     return o->r0n > 0. && mu > 0. && isfinite(o->beta) && isfinite(o->eta) && isfinite(o->mu_r0);
 }
 
@@ -1180,6 +1182,7 @@ static void kepler_functions(const struct kepler_orbit_uv* o, double d, double s
     stumpff(o->beta*s*s, c);
     G[0] = c[0]; G[1] = s*c[1]; G[2] = s*s*c[2]; G[3] = s*s*s*c[3];
 }
+
 // The point t after the start: Kepler's equation r0 G1 + eta G2 + mu G3 = t
 // solved by Halley's method from s(t)'s Taylor series to the cube about the
 // last point drawn (ds/dt = 1/r, d^2s/dt^2 = -r'/r^3, d^3s/dt^3 =
@@ -1188,14 +1191,13 @@ static int kepler_drift(const double r0[3], const double v0[3], struct kepler_or
     const double ir = 1./o->r;
     const double u = (t - o->t)*ir, a = o->dr*ir;
     double d = u*(1. + u*(-0.5*a + u*((3.*a*a - o->ddr*ir)*(1./6.))));
-    const double k = o->mu - o->beta*o->r0n;
     for (int it=0; it<PFVI_PREDICTOR_KEPLER_ITERATIONS; it++){
         const double s = o->s + d;
         double G[4];
         kepler_functions(o, d, s, G);
         const double F = o->r0n*G[1] + o->eta*G[2] + o->mu*G[3] - t;
         const double dF = o->r0n*G[0] + o->eta*G[1] + o->mu*G[2];   // the radius at s
-        const double ddF = o->eta*G[0] + k*G[1];
+        const double ddF = o->eta*G[0] + o->k*G[1];
         const double ds = F*dF/(dF*dF - 0.5*F*ddF);
         if (!isfinite(ds)){
             return 0;
@@ -1375,11 +1377,11 @@ static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, 
     }
     rest_integral(st, rw, h, rest0, (const double (*)[3])rest_old, drift);
     double cm_drift[PFVI_STAGES_MAX][3], cm0[3], cmv[3];
+    // A pair's barycentre from mass fractions (a first iterate: no division
+    // per component; and tiny masses, PFVI_MASS_TINY, need no branch).
+    const double wi = pi->m/M, wp = mp/M;
     if (pair){
         double cma0[3], cma_old[PFVI_STAGES_MAX][3];
-        // The barycentre from mass fractions (a first iterate: no division
-        // per component; and tiny masses, PFVI_MASS_TINY, need no branch).
-        const double wi = pi->m/M, wp = mp/M;
         for (int c=0; c<3; c++){
             cm0[c] = wi*q0[c] + wp*xc0[c];
             cmv[c] = wi*v0[c] + wp*vc0[c];
@@ -1409,8 +1411,8 @@ static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, 
             double (*xp)[3] = st->solve_x[p];
             for (int c=0; c<3; c++){
                 const double cm = cm0[c] + (t*cmv[c] + cm_drift[k][c]);
-                x[k][c] = cm + (mp/M)*r[c];
-                xp[k][c] = (cm - (pi->m/M)*r[c]) - cr.g[c];
+                x[k][c] = cm + wp*r[c];
+                xp[k][c] = (cm - wi*r[c]) - cr.g[c];
             }
         }else{
             // About the centre's own predicted path (drawn first, unless a
