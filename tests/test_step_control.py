@@ -184,6 +184,37 @@ def test_epsilon_above_kappa_cap_takes_the_cap_steps():
     assert sim.integrator.epsilon_effective == pytest.approx(1.2e-7)
 
 
+def steps_warned(sim, seconds):
+    """The warnings a run gives within its first `seconds` of simulated time."""
+    import warnings
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sim.integrate(seconds)
+        sim.integrate(2 * seconds)
+    return [str(w.message) for w in caught if "steps an orbit" in str(w.message)]
+
+
+@pytest.mark.parametrize("s, epsilon, warned", [(2, 1e-8, True), (2, 1e-6, False), (3, 1e-12, False),
+                                                (8, 1e-14, False)])
+def test_a_request_of_millions_of_steps_an_orbit_is_said_once(s, epsilon, warned):
+    # s = 2 at epsilon 1e-12 (held at 1e-10) took 7e7 steps an orbit of e = 0.9
+    # without a word: a user takes it for a hang. The steps it says are those taken.
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0)
+    sim.move_to_com()
+    configure(sim, "pfvi", stages=s, epsilon=epsilon)
+    period = sim.particles[1].P
+    said = steps_warned(sim, 0.01 * period)
+    assert len(said) == (1 if warned else 0), said
+    if warned:
+        import re
+        stated = float(re.search(r"about ([0-9.e+-]+) steps an orbit", said[0]).group(1))
+        taken = sim.integrator.n_steps / 0.02
+        assert 0.8 < taken / stated < 1.25, (taken, stated)
+        assert f"stages = {s}" in said[0] and "stages = 8: about" in said[0]
+
+
 def relative_state_error(sim, start):
     t0, state0 = start
     worst = 0.0

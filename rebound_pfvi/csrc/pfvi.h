@@ -188,6 +188,13 @@ enum pfvi_centre_kind { PFVI_CENTRES(PFVI_ENUM_VALUE) };
 // request is taken as this, per s. (Above C_s KAPPA_MAX^(2s - 2) kappa is
 // held at KAPPA_MAX: requests there take its steps.)
 #define PFVI_EPSILON_FLOORS {0., 0., 1e-10, 1e-12, 1e-13, 1e-14, 1e-14, 1e-14, 1e-14}
+// Below this kappa REBOUND is told, once per simulation, how many steps an
+// orbit takes: about 2 pi/kappa on a circle (measured 1.09 times it), more
+// on eccentric orbits (s = 2 at epsilon 1e-10: 2.6e6 steps an orbit at
+// e = 0, 7e7 at e = 0.9), which a user takes for a hang where more stages
+// take tens. Only s = 2 below epsilon 1.4e-7 gets there (s = 3 at its floor:
+// kappa 1.3e-3).
+#define PFVI_KAPPA_WARN 1e-4
 // A symmetric step at whose end the density sigma exceeds this many times the
 // one it was sized for (kappa/h) is retried at half the step.
 #define PFVI_DENSITY_JUMP_MAX 3.0
@@ -1084,6 +1091,8 @@ struct pfvi_state {
     // A fixed step's stages implied an error above PFVI_FIXED_WARN and
     // REBOUND was told (once per simulation; not saved).
     int fixed_warned;
+    // kappa was below PFVI_KAPPA_WARN and REBOUND was told (once per simulation; not saved).
+    int kappa_warned;
     // A step was kept unresolved and REBOUND was told (once per simulation; not saved).
     int unresolved_warned;
     // Without pairs: consecutive steps retaken to a step that no longer

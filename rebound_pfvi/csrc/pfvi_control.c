@@ -734,6 +734,21 @@ static void count_unresolved(struct reb_simulation* r, struct pfvi_state* st, do
     reb_simulation_warning(r, msg);
 }
 
+// A kappa below PFVI_KAPPA_WARN: said once per simulation, with the steps an
+// orbit takes at these stages and at the most.
+static void warn_small_kappa(struct reb_simulation* r, struct pfvi_state* st, double kappa){
+    st->kappa_warned = 1;
+    struct pfvi_options most = st->options;
+    most.stages = PFVI_STAGES_MAX;
+    const double turn = 2.*M_PI;
+    char msg[REB_STRING_SIZE_MAX];
+    // (REBOUND keeps 254 characters of a message.)
+    snprintf(msg, sizeof(msg), "pfvi: epsilon %.3g at stages = %d takes steps of %.2g radians of the fastest orbit: "
+            "about %.2g steps an orbit, more where it is eccentric (stages = %d: about %.2g). Said once per simulation.",
+            st->options.epsilon, st->options.stages, kappa, turn/kappa, PFVI_STAGES_MAX, turn/symmetric_kappa(&most));
+    reb_simulation_warning(r, msg);
+}
+
 // The shortest |v|/|a| at the step's start over the bodies that move and
 // are pulled (0 if none): about the time a body takes to turn.
 static double unpaired_time_scale(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
@@ -1011,6 +1026,9 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     const double u_target = constants->u_target;
     const double sigma0 = st->density_sigma, g0 = st->density_dlog;
     st->statistics.epsilon_effective = constants->epsilon_effective;
+    if (kappa < PFVI_KAPPA_WARN && !st->kappa_warned){
+        warn_small_kappa(r, st, kappa);
+    }
     if (!(sigma0 > 0.)){
         return control_unpaired(r, st, N, t0, sign, constants);
     }
