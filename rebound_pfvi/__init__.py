@@ -168,7 +168,8 @@ __doc__ = (__doc__ or "") + _fields_doc() + _archive_doc()
 
 
 def _refuse_integers_that_wrap():
-    """sim.integrator.<field> = value for "pfvi": REBOUND passes an integer
+    """sim.integrator.<field> = value for "pfvi": a statistic is read-only;
+    REBOUND passes an integer
     field's value through ctypes.c_int, which wraps (stages = 2**32 + 4 ran at
     s = 4). An int that does not fit the field's C type is refused here,
     naming the field; everything else is REBOUND's own assignment (and a
@@ -185,6 +186,9 @@ def _refuse_integers_that_wrap():
         limits[ctype] = (-2**(bits - 1), 2**(bits - 1) - 1) if ctype(-1).value < 0 else (0, 2**bits - 1)
 
     def __setattr__(self, name, value):
+        if self.name == INTEGRATOR_NAME.encode() and name in _STATISTICS:
+            # (The docs say read-only; REBOUND wrote them: n_steps = 5 counted on from 5.)
+            raise AttributeError(f"integrator.{name} is a statistic pfvi counts (read-only); not set")
         if self.name == INTEGRATOR_NAME.encode() and isinstance(value, int) and not isinstance(value, bool):
             descriptor = self.callbacks.field_descriptor_list.field_descriptor_for_name(name)
             low, high = limits.get(REB_BINARYDATA_DTYPE.get(descriptor.dtype), (None, None))

@@ -205,6 +205,14 @@ def test_non_finite_gravitational_constant_is_named(stages):
     assert_refused(sim, r"sim\.G = nan is not finite")
 
 
+@pytest.mark.parametrize("value", [math.nan, math.inf])
+def test_non_finite_softening_is_named(value):
+    # It used to read as "the force on particle 0 is not finite".
+    sim = pfvi_sim()
+    sim.softening = value
+    assert_refused(sim, rf"sim\.softening = {value} is not finite")
+
+
 def test_non_finite_time_is_named(stages):
     sim = pfvi_sim(stages)
     sim.t = math.inf
@@ -280,3 +288,72 @@ def test_a_step_below_the_rounding_of_t_is_refused_not_repeated_for_ever(epsilon
     with pytest.raises(RuntimeError, match=r"step dt = 1e-10 does not change t = 10000000000 .*state restored"):
         sim.integrate(1e10 + 1.0)
     assert snapshot(sim) == before
+
+
+def refusing_system(collisions):
+    """A star and two planets, a third body overlapping the second (so that a
+    collision search would merge them), and a NaN that pfvi refuses."""
+    sim = rebound.Simulation()
+    sim.add(m=1.0, r=0.005)
+    sim.add(m=1e-3, a=1.0, r=1e-3)
+    sim.add(m=1e-3, a=1.5, r=1e-3)
+    sim.add(m=1e-5, a=1.5, f=1e-4, r=1e-3)
+    if collisions:
+        sim.collision = collisions
+        sim.collision_resolve = "merge"
+    sim.integrator = "pfvi"
+    return sim
+
+
+@pytest.mark.parametrize("collisions", [None, "direct", "line"])
+@pytest.mark.parametrize("call", ["integrate", "steps"])
+def test_a_refused_step_runs_none_of_reboundsstep_after_it(collisions, call):
+    # After the integrator's part of a step REBOUND runs the post-timestep
+    # modifications (REBOUNDx's operators too), the ODEs over dt_last_done,
+    # the collision search and the heartbeat: on a refused step they changed
+    # a mass, merged bodies and advanced an ODE over the step before again,
+    # and steps() went on refusing step after step, calling them each time.
+    sim = refusing_system(collisions)
+    calls = {"post": 0, "pre": 0, "heartbeat": 0}
+
+    def post(simp):
+        calls["post"] += 1
+        simp.contents.particles[2].m += 1e-6
+
+    def pre(simp):
+        calls["pre"] += 1
+
+    def heartbeat(simp):
+        calls["heartbeat"] += 1
+
+    ode = sim.create_ode(length=1)
+    ode.y[0] = 0.0
+
+    def derivatives(ode, yDot, y, t):
+        yDot[0] = 1.0  # y = t - t_start
+
+    ode.derivatives = derivatives
+    sim.post_timestep_modifications = post
+    sim.pre_timestep_modifications = pre
+    sim.heartbeat = heartbeat
+    sim.particles[3].x = 1.5 * math.cos(1e-4) + 0.5   # apart while the run starts
+    sim.integrate(0.3)
+    assert ode.y[0] == pytest.approx(0.3, rel=1e-12)
+    sim.particles[3].x = sim.particles[2].x + 1e-4        # now overlapping the second planet
+    sim.particles[1].x = float("nan")
+    before, n_before, y_before = snapshot(sim), sim.N, ode.y[0]
+    counted = dict(calls)
+    with pytest.raises(RuntimeError, match="particle 1 has x = nan"):
+        sim.integrate(1.0) if call == "integrate" else sim.steps(10)
+    assert sim.N == n_before
+    assert snapshot(sim) == before
+    assert ode.y[0] == y_before
+    assert calls["post"] == counted["post"] and calls["heartbeat"] - counted["heartbeat"] <= 1
+    assert calls["pre"] - counted["pre"] <= 1   # before pfvi's step: REBOUND's, once
+    # Everything held is back once the call ends: the next good step runs it all.
+    assert sim.collision == (collisions or "none")
+    sim.particles[1].x = 1.0
+    sim.particles[3].x = 2.5
+    sim.integrate(0.6)
+    assert calls["post"] > counted["post"] and calls["heartbeat"] > counted["heartbeat"] + 1
+    assert ode.y[0] == pytest.approx(0.6, rel=1e-12)

@@ -14,7 +14,7 @@ import textwrap
 import pytest
 import rebound
 
-import rebound_pfvi  # noqa: F401
+import rebound_pfvi
 from conftest import PYTHON_HEARTBEAT
 
 FIELDS = ("x", "y", "z", "vx", "vy", "vz", "m")
@@ -324,6 +324,17 @@ def test_integers_that_do_not_fit_are_refused_on_assignment(field, value):
     before = getattr(sim.integrator, field)
     with pytest.raises(ValueError, match=f"integrator.{field} = {value} does not fit"):
         setattr(sim.integrator, field, value)
+    assert getattr(sim.integrator, field) == before
+
+
+@pytest.mark.parametrize("field", sorted(rebound_pfvi._STATISTICS))
+def test_statistics_are_read_only(field):
+    # The docs call them read-only; REBOUND wrote them (n_steps = 5 counted on from 5).
+    sim = sun_and_planet(epsilon=1e-6)
+    sim.integrate(1.0)
+    before = getattr(sim.integrator, field)
+    with pytest.raises(AttributeError, match=f"integrator.{field} is a statistic"):
+        setattr(sim.integrator, field, 5)
     assert getattr(sim.integrator, field) == before
 
 

@@ -118,6 +118,70 @@ def test_free_motion_and_a_uniform_field_keep_the_step():
     assert abs(sim.particles[0].y - 5.0) < 1e-12
 
 
+def free_bodies(kind):
+    sim = rebound.Simulation()
+    if kind == "lone body":
+        sim.add(m=1.0, x=0.1, vx=0.2)
+    elif kind == "G = 0":
+        sim.G = 0.0
+        for k in range(4):
+            sim.add(m=1.0, x=float(k), vy=0.1 * k, vz=0.01)
+    elif kind == "gravity off":
+        sim.gravity = "none"
+        for k in range(4):
+            sim.add(m=1.0, x=float(k), vy=0.1 * k, vz=0.01)
+    else:  # test particles only
+        for k in range(3):
+            sim.add(m=0.0, x=float(k), vx=-0.1 * k)
+    return sim
+
+
+@pytest.mark.parametrize("kind", ["lone body", "G = 0", "gravity off", "test particles only"])
+def test_free_motion_grows_without_bound(kind):
+    # Where nothing can act, steps from REBOUND's sim.dt = 0.001 were held at
+    # it: a lone body took 1e7 steps to t = 1e4 (1e5 hung; IAS15: 13 and 15).
+    sim = free_bodies(kind)
+    start = [(p.x, p.y, p.z, p.vx, p.vy, p.vz) for p in sim.particles]
+    sim.integrator = "pfvi"
+    sim.integrate(1e5)
+    assert sim.integrator.n_steps < 40
+    for p, (x, y, z, vx, vy, vz) in zip(sim.particles, start):
+        for now, at_start, v in ((p.x, x, vx), (p.y, y, vy), (p.z, z, vz)):
+            assert now == pytest.approx(at_start + v * 1e5, rel=1e-14, abs=1e-10)
+
+
+@pytest.mark.parametrize("collision", ["direct", "line"])
+def test_free_bodies_on_long_steps_still_collide(collision):
+    # Two bodies at G = 0 meet at t = 499.9 (radii 0.1): the steps grow past
+    # it, and the contact inside a step is found and REBOUND merges them.
+    sim = rebound.Simulation()
+    sim.G = 0.0
+    sim.add(m=1.0, r=0.1, x=0.0, vx=1.0)
+    sim.add(m=1.0, r=0.1, x=1000.0, vx=-1.0)
+    sim.collision = collision
+    sim.collision_resolve = "merge"
+    sim.integrator = "pfvi"
+    sim.integrate(1000.0)
+    assert sim.N == 1 and sim.particles[0].m == 2.0
+    assert sim.particles[0].x == pytest.approx(500.0, abs=1e-9)
+    assert sim.integrator.n_steps < 60
+
+
+def test_a_force_keeps_free_steps_bounded():
+    # One additional force, even one that is zero everywhere, could have a
+    # region ahead that a long step would leap: the bound stays.
+    sim = free_bodies("lone body")
+
+    def nothing(simp):
+        pass
+
+    sim.additional_forces = nothing
+    sim.integrator = "pfvi"
+    sim.dt = 0.5
+    sim.integrate(100.0)
+    assert sim.integrator.n_steps == 200
+
+
 SLAB_X, SLAB_W = 10.0, 0.2
 
 

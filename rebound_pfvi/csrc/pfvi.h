@@ -1091,6 +1091,15 @@ struct pfvi_state {
     // A fixed step's stages implied an error above PFVI_FIXED_WARN and
     // REBOUND was told (once per simulation; not saved).
     int fixed_warned;
+    // A refused step's REBOUND hooks, held from the refusal to REBOUND's
+    // synchronize at the end of the call (pfvi_integrator.c, pfvi_step):
+    // the rest of REBOUND's step then runs none of them on the restored
+    // state (not saved).
+    int hooks_held;
+    void (*held_pre)(struct reb_simulation* const r);
+    void (*held_post)(struct reb_simulation* const r);
+    void (*held_heartbeat)(struct reb_simulation* r);
+    int held_collision;
     // kappa was below PFVI_KAPPA_WARN and REBOUND was told (once per simulation; not saved).
     int kappa_warned;
     // A step was kept unresolved and REBOUND was told (once per simulation; not saved).
@@ -1443,6 +1452,8 @@ PFVI_INTERNAL int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi
 // gravity): code that may edit particles during an evaluation, and whose
 // forces no field of REBOUND's describes.
 PFVI_INTERNAL int pfvi_forces_run_user_code(const struct reb_simulation* r);
+// Error messages REBOUND holds (a refusal adds one).
+PFVI_INTERNAL int pfvi_rebound_errors(const struct reb_simulation* r);
 // pfvi_gravity.c: whether REBOUND's routine would compute only its basic
 // gravity (no additional forces, variations, ghost boxes or ignored terms),
 // which pfvi_gravity_stages then computes at stages k0 .. k1 of positions x

@@ -779,6 +779,29 @@ static double unpaired_time_scale(const struct reb_simulation* r, const struct p
 // the start; a sim.dt below the run's proposal caps one step. Before, the steps were sim.dt whatever epsilon asked: a test
 // particle of e = 0.9 in a Kepler potential from additional_forces ended
 // 140 off IAS15 at sim.dt = 1 with no warning (a hostile trial).
+// Nothing can change the bodies' straight paths: no pair that gravity
+// joins (G = 0, gravity off, fewer than two bodies, or no active body with
+// mass), no force of the user's or REBOUNDx's and no timestep hook. The
+// stages are then exact at any step, and no force region lies ahead for a
+// long step to leap. (Contacts are found along each step's path whatever
+// its length: pfvi_contact.c.)
+static int motion_is_free(const struct reb_simulation* r, size_t N){
+    if (r->additional_forces || r->pre_timestep_modifications || r->post_timestep_modifications
+            || r->gravity == REB_GRAVITY_CUSTOM){
+        return 0;
+    }
+    if (r->gravity == REB_GRAVITY_NONE || r->G == 0. || N < 2){
+        return 1;
+    }
+    const size_t n_active = (r->N_active < N) ? r->N_active : N;
+    for (size_t j=0; j<n_active; j++){
+        if (r->particles[j].m != 0.){
+            return 0;
+        }
+    }
+    return 1;
+}
+
 static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
         double sign, const struct pfvi_symmetric_constants* constants){
     const int s = st->options.stages;
@@ -967,6 +990,12 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
         // crossed at sim.dt = 0.5 took 1359 steps to t = 20, now 543.)
         st->dt_free = fmax(st->dt_free, h);
         next = fmax(next, fmin(PFVI_CONTROL_GROW_MAX*h, st->dt_free));
+        if (motion_is_free(r, N)){
+            // Where nothing can act, grown as far as the run goes, as
+            // IAS15's are (else a lone body at REBOUND's sim.dt = 0.001 took
+            // 1e7 steps to t = 1e4, and 1e5 hung; a hostile trial).
+            next = PFVI_CONTROL_GROW_MAX*fmax(h, proposed);
+        }
     }else if (u_own > u){
         // Resolved only against the motion (a force too weak to matter over
         // this step): grown no further than the force's own scale allows,

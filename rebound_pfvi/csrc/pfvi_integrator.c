@@ -299,6 +299,9 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "own scale, or free motion, allows. Forces that do not vary over a step (free motion, a uniform field) keep the "
       "step, or grow it back (at most " PFVI_STR(PFVI_CONTROL_GROW_MAX) "x a step) to the longest "
       "such step the run took (sim.dt at the start), never beyond, so as not to leap a force region; "
+      "where nothing can act (no pair gravity joins: G = 0, gravity off, one body or no active mass; no "
+      "additional force and no timestep hook) they grow " PFVI_STR(PFVI_CONTROL_GROW_MAX) "x a step without "
+      "bound, as IAS15's do (contacts are still found inside them); "
       "a sim.dt below the run's proposal (REBOUND's cut to a requested time, the value it restores "
       "after one, the user's) caps one step, and the next is grown from the proposal. "
       "'seed' (K&V): a step is accepted if the osculating-circle estimate "
@@ -730,6 +733,11 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_option
         pfvi_error(r, "pfvi: sim.t = %g is not finite.", r->t);
         return 0;
     }
+    if (!isfinite(r->softening)){
+        // (Else every force reads NaN, and the message blamed particle 0.)
+        pfvi_error(r, "pfvi: sim.softening = %g is not finite; step not taken.", r->softening);
+        return 0;
+    }
     if (r->N_active != SIZE_MAX && r->N_active > r->N){
         // REBOUND's gravity loops i < N_active over the particles: past N it
         // reads and writes beyond them.
@@ -770,6 +778,31 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_option
     return 1;
 }
 
+// The hooks a refused step holds until REBOUND synchronizes at the end of
+// the call, and gives back there.
+static void hooks_hold(struct reb_simulation* r, struct pfvi_state* st){
+    st->hooks_held = 1;
+    st->held_pre = r->pre_timestep_modifications;
+    st->held_post = r->post_timestep_modifications;
+    st->held_heartbeat = r->heartbeat;
+    st->held_collision = (int)r->collision;
+    r->pre_timestep_modifications = NULL;
+    r->post_timestep_modifications = NULL;
+    r->heartbeat = NULL;
+    r->collision = REB_COLLISION_NONE;
+}
+
+static void hooks_release(struct reb_simulation* r, struct pfvi_state* st){
+    if (!st->hooks_held){
+        return;
+    }
+    st->hooks_held = 0;
+    r->pre_timestep_modifications = st->held_pre;
+    r->post_timestep_modifications = st->held_post;
+    r->heartbeat = st->held_heartbeat;
+    r->collision = st->held_collision;
+}
+
 // REBOUND synchronizes at the end of steps() and integrate() and around
 // pre- and post-timestep modifications: user code may run next and change
 // what the force depends on where no field shows it (a callback's own
@@ -780,6 +813,9 @@ static void pfvi_synchronize(struct reb_simulation* r, void* state){
     if (st){
         st->cache_N = 0;
         st->dt_at_sync = r->dt;
+        if (st->in_step == PFVI_STEP_IDLE){
+            hooks_release(r, st);
+        }
     }
 }
 
@@ -1424,12 +1460,45 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
     }
 }
 
+static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st);
+
+// A refused step leaves t and every particle as they were; REBOUND's step
+// then goes on with what follows the integrator's part: the user's
+// post-timestep modifications (REBOUNDx's operators among them), the ODEs
+// over dt_last_done, the collision search and its resolve functions, the
+// heartbeat. Each would act on the restored state as though a step had been
+// taken (a mass changed, overlapping bodies merged, an ODE advanced over
+// the step before again: a hostile trial). So a refusal ends the call
+// (status GENERIC_ERROR, which steps() did not see: it went on refusing
+// step after step), sets dt_last_done to 0 (REBOUND's own "the step
+// failed"), and holds those hooks, as the integrator's synchronize
+// gives back when REBOUND ends the call. (Not for a step asked for from a
+// callback inside a running step: that step owns the state and the hooks.)
 static void pfvi_step(struct reb_simulation* r, void* state){
     struct pfvi_state* const st = state;
     if (!st){
         reb_simulation_error(r, "pfvi: integrator state missing (allocation failed).");
         return;
     }
+    const int nested = (st->in_step != PFVI_STEP_IDLE);
+    if (!nested){
+        hooks_release(r, st);
+    }
+    const int errors = pfvi_rebound_errors(r);
+    const double t = r->t;
+    pfvi_step_once(r, st);
+    // Refused: an error said and t where it was. (A step asked for from a
+    // callback was refused with an error while the running step went on:
+    // that step's t moved. A callback that switched the integrator freed st
+    // at the step's end.)
+    if (!nested && r->integrator.state == state && pfvi_rebound_errors(r) > errors && r->t == t){
+        r->status = REB_STATUS_GENERIC_ERROR;
+        r->dt_last_done = 0.;
+        hooks_hold(r, st);
+    }
+}
+
+static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
     if (st->in_step != PFVI_STEP_IDLE){
         // steps() or integrate() from a callback during a step: the running
         // step owns the state.

@@ -714,7 +714,7 @@ extern const int reb_messages_max_N;
 
 // REBOUND's error messages waiting to be read (Python keeps them,
 // save_messages: each is raised when the call returns).
-static int rebound_errors(const struct reb_simulation* r){
+int pfvi_rebound_errors(const struct reb_simulation* r){
     int n = 0;
     for (int i=0; r->messages != NULL && i<reb_messages_max_N; i++){
         n += (r->messages[i] != NULL && r->messages[i][0] == 'e');
@@ -734,7 +734,7 @@ int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, si
     if (guarded){
         written_keep(r, st, N);
     }
-    const int errors = rebound_errors(r);
+    const int errors = pfvi_rebound_errors(r);
     reb_simulation_update_acceleration(r);
     st->statistics.n_force_evaluations++;
     if (st->reentry_refused){
@@ -746,7 +746,7 @@ int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, si
         pfvi_roll_back_changed_N(r, st, N, t0);
         return 0;
     }
-    if (rebound_errors(r) > errors){
+    if (pfvi_rebound_errors(r) > errors){
         // An error inside the forces (a REBOUNDx effect without its
         // parameter, a callback calling reb_simulation_error): the forces
         // are not to be used. The step is refused, its state restored; the
