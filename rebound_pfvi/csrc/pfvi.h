@@ -1364,6 +1364,12 @@ struct pfvi_state {
     double output_megno[2][2];     // REBOUND's megno_Ys and megno_Yss: the run's [0] and shown [1]
     double output_t;
     double output_t_real;
+    // The symmetric control's last step: the time its end force was evaluated
+    // at and the time its state was labelled with (t folded with its
+    // rounding, or the time REBOUND asked for): a forces check at the run's
+    // state evaluates at the former (not saved: after a load, t itself).
+    double end_force_t;
+    double end_force_label;
     int output_stages;             // the options the shown output was made with
     double output_epsilon;
     struct pfvi_output_check* output_check;   // (output_check_N of them: 0 from an archive without them)

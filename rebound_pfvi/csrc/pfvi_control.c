@@ -1248,6 +1248,9 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
     const int capped = (h == cap);
     h = capped ? sign*h - t_lo : sign*h;
     pfvi_commit_step(r, st, N, h);
+    // The time the end's force was evaluated at (the trial's t0 + h), before
+    // t is relabelled below (pfvi_output_forces_hold compares at it).
+    const double t_force = r->t;
     if (capped){
         // The time REBOUND asked for, which the state is at (the stage
         // predictor follows the relabelling).
@@ -1270,6 +1273,8 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         st->t_compensation = (t1 - (folded - part)) + (lost - part);
     }
     st->t_compensated = r->t;
+    st->end_force_t = t_force;
+    st->end_force_label = r->t;
     int asymmetric = shortened;
     if (unresolved){
         // Shorter steps did not help: the density was right, keep its scale.
