@@ -357,3 +357,26 @@ def test_a_refused_step_runs_none_of_reboundsstep_after_it(collisions, call):
     sim.integrate(0.6)
     assert calls["post"] > counted["post"] and calls["heartbeat"] > counted["heartbeat"] + 1
     assert ode.y[0] == pytest.approx(0.6, rel=1e-12)
+
+
+def test_a_refusal_is_seen_with_rebounds_message_queue_full():
+    # REBOUND keeps 10 messages and drops the oldest for a new one: with 10
+    # errors queued the count of errors did not grow at the refusal, which
+    # went unseen (steps(5) ran the post-timestep hook 5 times on a refused state).
+    import ctypes
+    sim = refusing_system(None)
+    calls = {"post": 0}
+
+    def post(simp):
+        calls["post"] += 1
+        simp.contents.particles[0].m *= 0.99
+
+    sim.post_timestep_modifications = post
+    sim.integrate(1.0)
+    for k in range(10):
+        rebound.clibrebound.reb_simulation_error(ctypes.byref(sim), b"an earlier error %d" % k)
+    sim.particles[2].x = float("nan")
+    before, counted = snapshot(sim), calls["post"]
+    with pytest.raises(RuntimeError):
+        sim.steps(5)
+    assert snapshot(sim) == before and calls["post"] == counted

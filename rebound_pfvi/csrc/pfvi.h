@@ -1458,8 +1458,14 @@ PFVI_INTERNAL int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi
 // gravity): code that may edit particles during an evaluation, and whose
 // forces no field of REBOUND's describes.
 PFVI_INTERNAL int pfvi_forces_run_user_code(const struct reb_simulation* r);
-// Error messages REBOUND holds (a refusal adds one).
-PFVI_INTERNAL int pfvi_rebound_errors(const struct reb_simulation* r);
+// REBOUND's error messages held, and its newest message (pfvi_state.c):
+// whether an error was said since a mark.
+struct pfvi_error_mark {
+    int n;
+    const char* newest;
+};
+PFVI_INTERNAL struct pfvi_error_mark pfvi_rebound_errors(const struct reb_simulation* r);
+PFVI_INTERNAL int pfvi_rebound_error_since(const struct reb_simulation* r, struct pfvi_error_mark before);
 // pfvi_gravity.c: whether REBOUND's routine would compute only its basic
 // gravity (no additional forces, variations, ghost boxes or ignored terms),
 // which pfvi_gravity_stages then computes at stages k0 .. k1 of positions x

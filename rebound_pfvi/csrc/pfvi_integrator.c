@@ -300,7 +300,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "step, or grow it back (at most " PFVI_STR(PFVI_CONTROL_GROW_MAX) "x a step) to the longest "
       "such step the run took (sim.dt at the start), never beyond, so as not to leap a force region; "
       "where nothing can act (no pair gravity joins: G = 0, gravity off, one body or no active mass; no "
-      "additional force and no timestep hook) they grow " PFVI_STR(PFVI_CONTROL_GROW_MAX) "x a step without "
+      "additional force, no timestep hook and no ghost boxes) they grow " PFVI_STR(PFVI_CONTROL_GROW_MAX) "x a step without "
       "bound, as IAS15's do (contacts are still found inside them); "
       "a sim.dt below the run's proposal (REBOUND's cut to a requested time, the value it restores "
       "after one, the user's) caps one step, and the next is grown from the proposal. "
@@ -1484,14 +1484,14 @@ static void pfvi_step(struct reb_simulation* r, void* state){
     if (!nested){
         hooks_release(r, st);
     }
-    const int errors = pfvi_rebound_errors(r);
+    const struct pfvi_error_mark errors = pfvi_rebound_errors(r);
     const double t = r->t;
     pfvi_step_once(r, st);
     // Refused: an error said and t where it was. (A step asked for from a
     // callback was refused with an error while the running step went on:
     // that step's t moved. A callback that switched the integrator freed st
     // at the step's end.)
-    if (!nested && r->integrator.state == state && pfvi_rebound_errors(r) > errors && r->t == t){
+    if (!nested && r->integrator.state == state && pfvi_rebound_error_since(r, errors) && r->t == t){
         r->status = REB_STATUS_GENERIC_ERROR;
         r->dt_last_done = 0.;
         hooks_hold(r, st);

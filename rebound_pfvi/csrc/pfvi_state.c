@@ -713,13 +713,23 @@ static int written_changed(const struct reb_simulation* r, struct pfvi_state* st
 extern const int reb_messages_max_N;
 
 // REBOUND's error messages waiting to be read (Python keeps them,
-// save_messages: each is raised when the call returns).
-int pfvi_rebound_errors(const struct reb_simulation* r){
-    int n = 0;
+// save_messages: each is raised when the call returns), and the newest
+// message: REBOUND keeps at most reb_messages_max_N, dropping the oldest for
+// a new one, so that with the queue full a new error can leave the count as
+// it was (10 errors queued, then a refusal: missed; a hostile trial). Its
+// string is then a new allocation, while the newest before it is still held.
+struct pfvi_error_mark pfvi_rebound_errors(const struct reb_simulation* r){
+    struct pfvi_error_mark m = {0, NULL};
     for (int i=0; r->messages != NULL && i<reb_messages_max_N; i++){
-        n += (r->messages[i] != NULL && r->messages[i][0] == 'e');
+        m.n += (r->messages[i] != NULL && r->messages[i][0] == 'e');
+        m.newest = (r->messages[i] != NULL) ? r->messages[i] : m.newest;
     }
-    return n;
+    return m;
+}
+
+int pfvi_rebound_error_since(const struct reb_simulation* r, struct pfvi_error_mark before){
+    const struct pfvi_error_mark now = pfvi_rebound_errors(r);
+    return now.n > before.n || (now.newest != before.newest && now.newest != NULL && now.newest[0] == 'e');
 }
 
 int pfvi_forces_run_user_code(const struct reb_simulation* r){
@@ -734,7 +744,7 @@ int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, si
     if (guarded){
         written_keep(r, st, N);
     }
-    const int errors = pfvi_rebound_errors(r);
+    const struct pfvi_error_mark errors = pfvi_rebound_errors(r);
     reb_simulation_update_acceleration(r);
     st->statistics.n_force_evaluations++;
     if (st->reentry_refused){
@@ -746,7 +756,7 @@ int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, si
         pfvi_roll_back_changed_N(r, st, N, t0);
         return 0;
     }
-    if (pfvi_rebound_errors(r) > errors){
+    if (pfvi_rebound_error_since(r, errors)){
         // An error inside the forces (a REBOUNDx effect without its
         // parameter, a callback calling reb_simulation_error): the forces
         // are not to be used. The step is refused, its state restored; the
