@@ -7,7 +7,7 @@ import rebound
 
 import rebound_pfvi
 
-from conftest import fixed_step_pfvi, snapshot, two_body
+from conftest import PYTHON_HEARTBEAT, fixed_step_pfvi, snapshot, two_body
 
 
 @pytest.fixture(params=rebound_pfvi.STAGES, ids=lambda s: f"s={s}")
@@ -335,7 +335,8 @@ def test_a_refused_step_runs_none_of_reboundsstep_after_it(collisions, call):
     ode.derivatives = derivatives
     sim.post_timestep_modifications = post
     sim.pre_timestep_modifications = pre
-    sim.heartbeat = heartbeat
+    if PYTHON_HEARTBEAT:   # (rebound before 5.2.2 cannot set it from Python)
+        sim.heartbeat = heartbeat
     sim.particles[3].x = 1.5 * math.cos(1e-4) + 0.5   # apart while the run starts
     sim.integrate(0.3)
     assert ode.y[0] == pytest.approx(0.3, rel=1e-12)
@@ -355,7 +356,8 @@ def test_a_refused_step_runs_none_of_reboundsstep_after_it(collisions, call):
     sim.particles[1].x = 1.0
     sim.particles[3].x = 2.5
     sim.integrate(0.6)
-    assert calls["post"] > counted["post"] and calls["heartbeat"] > counted["heartbeat"] + 1
+    assert calls["post"] > counted["post"]
+    assert calls["heartbeat"] > counted["heartbeat"] + 1 or not PYTHON_HEARTBEAT
     assert ode.y[0] == pytest.approx(0.6, rel=1e-12)
 
 
