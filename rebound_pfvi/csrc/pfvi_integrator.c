@@ -1481,6 +1481,12 @@ static void pfvi_step(struct reb_simulation* r, void* state){
         return;
     }
     const int nested = (st->in_step != PFVI_STEP_IDLE);
+    if (!nested && st->hooks_held && r->status == REB_STATUS_GENERIC_ERROR){
+        // The call that refused goes on (rebound before 5.2 runs all of
+        // steps(n) whatever the status): no step, and no second error,
+        // until it ends and REBOUND synchronizes.
+        return;
+    }
     if (!nested){
         hooks_release(r, st);
     }
