@@ -1497,7 +1497,7 @@ static void pfvi_step(struct reb_simulation* r, void* state){
     // callback was refused with an error while the running step went on:
     // that step's t moved. A callback that switched the integrator freed st
     // at the step's end.)
-    if (!nested && r->integrator.state == state && pfvi_rebound_error_since(r, errors) && r->t == t){
+    if (!nested && r->integrator.state == state && r->t == t && pfvi_rebound_error_since(r, errors)){
         r->status = REB_STATUS_GENERIC_ERROR;
         r->dt_last_done = 0.;
         hooks_hold(r, st);
