@@ -204,6 +204,45 @@ def _refuse_integers_that_wrap():
 _refuse_integers_that_wrap()
 
 
+def _tell_the_requested_time():
+    """sim.integrate(tmax) for "pfvi" tells the core tmax while REBOUND's
+    integrate runs. REBOUND decides whether a step finishes on tmax by
+    comparing t + sim.dt with it; what pfvi shows next may lie further (a
+    new simulation's first step, the run's end taken up after an output),
+    and without tmax such a state past it was shown to REBOUND's collision
+    search, Encounter, Escape, heartbeat and archive before the call came
+    back to tmax (docs/outputs.md). Every other integrator's call is
+    REBOUND's own."""
+    from rebound import Simulation
+
+    generic = Simulation.integrate
+    if getattr(generic, "_pfvi", False):
+        return
+
+    begin, end, address = _lib.pfvi_request_begin, _lib.pfvi_request_end, _ctypes.addressof
+    name = INTEGRATOR_NAME.encode()
+
+    def integrate(self, tmax, exact_finish_time=1):
+        if self.integrator.name != name:
+            return generic(self, tmax, exact_finish_time)
+        try:
+            held = begin(address(self), tmax)
+        except _ctypes.ArgumentError:
+            return generic(self, tmax, exact_finish_time)   # (REBOUND's own error for such a tmax)
+        try:
+            return generic(self, tmax, exact_finish_time)
+        finally:
+            end(address(self), held)   # (what an enclosing call asked for: NaN, none)
+
+    integrate.__doc__ = generic.__doc__
+    integrate.__wrapped__ = generic
+    integrate._pfvi = True
+    Simulation.integrate = integrate
+
+
+_tell_the_requested_time()
+
+
 def _check_stages(s):
     if s not in STAGES:
         raise ValueError(f"s={s!r} is not valid; allowed: {', '.join(map(str, STAGES))}")

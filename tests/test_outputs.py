@@ -362,6 +362,74 @@ def test_heartbeat_sees_the_requested_times():
     assert all(b >= a for a, b in zip(seen, seen[1:]))
 
 
+def planet_and_retrograde_particle():
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=0.9)
+    sim.add(m=1e-4, a=2.5, e=0.3, f=2.0)
+    sim.add(a=1.8, e=0.6, inc=3.0, f=1.0)
+    sim.move_to_com()
+    sim.integrator = "pfvi"
+    return sim
+
+
+@needs_python_heartbeat
+@pytest.mark.parametrize("build", [kepler, planet_and_retrograde_particle])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_no_state_past_the_requested_time_is_shown(build, seed):
+    # REBOUND decides whether a step finishes on the requested time by
+    # comparing t + sim.dt with it; pfvi's step may be longer than sim.dt (a
+    # new simulation's first, a symmetric step longer than it proposed), and
+    # such a step was shown, to the heartbeat and REBOUND's collision search,
+    # at its end past the time before the call came back to it (a hostile
+    # trial: 20-30 calls of 4000 at random times, and every new
+    # simulation's first call to a time inside its first step).
+    times = np.sort(np.random.default_rng(seed).uniform(0.0, 10.0, 200))
+    sim = build()
+    seen = []
+    sim.heartbeat = lambda s: seen.append((s.contents.t, s.contents.dt_last_done))
+    for t in times:
+        first = len(seen)
+        sim.integrate(t)
+        assert sim.t == t
+        assert all(shown <= t and lived >= 0. for shown, lived in seen[first:])
+    one = build()
+    one.integrate(times[-1])
+    assert state(sim).tobytes() == state(one).tobytes()
+    assert sim.integrator.n_steps == one.integrator.n_steps
+
+
+def approaching_body():
+    # A star, a planet at e = 0.5 and a small body closing on it at relative
+    # speed 1: 0.12 apart at t = 0.077, inside pfvi's first step (0.297).
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=0.5)
+    p = sim.particles[1]
+    sim.add(m=1e-6, x=p.x, y=p.y + 0.2, vx=p.vx, vy=p.vy - 1.0)
+    sim.move_to_com()
+    sim.integrator = "pfvi"
+    sim.exit_min_distance = 0.12
+    return sim
+
+
+@pytest.mark.parametrize("spacing", [0.002, 0.01, 0.03])
+def test_an_encounter_is_raised_by_the_call_that_reaches_it(spacing):
+    sim = approaching_body()
+    calls = [spacing*k for k in range(1, int(0.2/spacing) + 1)]
+    raised_in = None
+    for t in calls:
+        try:
+            sim.integrate(t)
+        except rebound.Encounter:
+            raised_in = t
+            break
+        assert sim.t == t
+    # (REBOUND raised it from a call to 0.002, 0.01 or 0.03 at t = 0.077.)
+    assert raised_in is not None and raised_in >= 0.077 > raised_in - spacing
+    assert 0.0765 < sim.t <= raised_in
+
+
 @needs_python_heartbeat
 @pytest.mark.parametrize("outputs", [5, 50, 500])
 @pytest.mark.parametrize("sign", [1, -1])

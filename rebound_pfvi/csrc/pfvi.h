@@ -797,6 +797,10 @@ PFVI_API int pfvi_partners(struct reb_simulation* r, size_t* out);
 // for s stages at the simulation as it stands (its accelerations are
 // evaluated); 0 without pairs.
 PFVI_API int pfvi_density_of(struct reb_simulation* r, int stages, double* out);
+// The time the running integrate() was asked for, where r's integrator is
+// pfvi (begin returns the one held before, NaN for none: end gives it back).
+PFVI_API double pfvi_request_begin(struct reb_simulation* r, double t);
+PFVI_API void pfvi_request_end(struct reb_simulation* r, double held);
 
 /* ------------------------------------------------ geometry (centre) */
 
@@ -1277,6 +1281,19 @@ struct pfvi_state {
     int reentry_refused;
     int status_at_start;
     double dt_at_start;
+    // The time the running integrate() was asked for (pfvi_request_begin,
+    // which rebound_pfvi's sim.integrate calls around REBOUND's): REBOUND
+    // decides whether a step finishes by comparing t + sim.dt with it, and
+    // pfvi's step may be longer than sim.dt, so a step that passes it shows
+    // it as a finishing step would. Not set: REBOUND's decision alone.
+    int request_set;
+    double request_t;
+    int request_shown;      // this step call showed it (pfvi_integrator.c)
+    // What REBOUND's own finish would have left as sim.dt after the call (the
+    // dt_last_done before the step that showed the time; REBOUND, which did
+    // not finish, restores the dt the call began with): set as the call ends.
+    int request_leaves;
+    double request_dt_leaves;
     // The sim.dt REBOUND leaves after an integrate() that ended on an output
     // (its last full step: the dt_last_done before the finishing step, or
     // the dt the call started with), so that a sim.dt the user sets after

@@ -245,7 +245,12 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "and the next step goes on from it if the simulation was not edited (particles, t, N, stages, "
       "epsilon or the force model; variational particles rescaled by REBOUND count as unedited), so "
       "a run's steps and states do not depend on its output times, and an output's error is the "
-      "run's plus that of one step shorter than its own. A time on one of the run's step ends is "
+      "run's plus that of one step shorter than its own. A step longer than sim.dt (a new "
+      "simulation's first), or the run's end taken up after an output (further than the proposal "
+      "in sim.dt where the steps shorten), that would pass the time Python's "
+      "sim.integrate(t) asked for shows t itself, as a finishing step would: no hook, collision "
+      "search, Encounter or Escape check sees a state past t (REBOUND's C reb_simulation_integrate, "
+      "called directly, does not tell pfvi t). A time on one of the run's step ends is "
       "the run's own state; the sim.dt REBOUND sets back after integrate() (its last full step, or "
       "the value the call began with) is told from one the user sets, and does not cap the next "
       "call (a sim.steps() right after a new simulation's first integrate() takes REBOUND's 0.001 "
@@ -1068,7 +1073,9 @@ enum pfvi_glue {
 struct pfvi_call {
     double t_entry, dt_entry, t_target;
     double proposed;        // the time REBOUND may see next (the run's proposal)
-    int finishing;          // REBOUND's LAST_STEP: sim.dt cut to reach t_target
+    int finishing;          // REBOUND's LAST_STEP: sim.dt cut to reach t_target (or a request passed)
+    int bounded;            // integrate()'s requested time lies ahead: no state past it is shown
+    double request;         // that time
     int eligible;           // outputs may be shown (pfvi_output_eligible)
     int shown;              // an output is shown, unedited
     int at_end;             // the simulation is at the run's last step's end
@@ -1148,6 +1155,13 @@ static int user_set_dt(const struct reb_simulation* r, const struct pfvi_state* 
     return !c->finishing && st->end_N != 0 && rebound_restore_known(st) && !rebound_restored(r, st, 0);
 }
 
+// A call that would pass integrate()'s requested time finishes on it.
+static void request_finish(struct pfvi_state* st, struct pfvi_call* c){
+    c->finishing = 1;
+    c->t_target = c->request;
+    st->request_shown = 1;
+}
+
 static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_call* c){
     *c = (struct pfvi_call){.t_entry = r->t, .dt_entry = r->dt, .t_target = r->t + r->dt};
     c->finishing = (st->status_at_start == REB_STATUS_LAST_STEP);
@@ -1193,6 +1207,19 @@ static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st
     }
     // (A value of REBOUND's own would cap the next step.)
     c->proposed = (st->dt_proposed != 0.) ? st->dt_proposed : c->dt_entry;
+    // REBOUND decided this step does not finish because t + sim.dt falls
+    // short of the requested time; pfvi's step may be longer than sim.dt
+    // (its first, or a symmetric step longer than it proposed), and the run's
+    // end taken up may lie past it. Neither is shown: REBOUND's collision
+    // search, Encounter, Escape, heartbeat and archive would see a time the
+    // call never reaches (a hostile trial: Encounter raised at t = 0.077 by
+    // integrate(0.01)). The time is shown as a finishing step shows it.
+    c->bounded = !c->finishing && c->eligible && st->request_set && r->exact_finish_time == 1
+        && (st->request_t - r->t)*r->dt > 0.;
+    c->request = st->request_t;
+    if (c->bounded && c->shown && (st->output_t_real - c->request)*r->dt > 0.){
+        request_finish(st, c);
+    }
     if (c->shown){
         return PFVI_GLUE_TAKE_UP;
     }
@@ -1359,6 +1386,10 @@ static enum pfvi_glue glue_step(struct reb_simulation* r, struct pfvi_state* st,
     st->output_last_t1 = r->t;
     st->output_N = 0;  // the simulation holds the run's state
     st->output_contact_pending = 0;
+    if (c->bounded && !c->finishing && (r->t - c->request)*h > 0.){
+        request_finish(st, c);   // (the run's step as REBOUND's own decision had it)
+        return PFVI_GLUE_SHOW_PASSED;
+    }
     return (c->dense && c->finishing && (r->t - c->t_target)*h > 0.) ? PFVI_GLUE_SHOW_PASSED : PFVI_GLUE_DONE;
 }
 
@@ -1515,6 +1546,7 @@ static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
     }
     st->in_step = PFVI_STEP_RUNNING;
     st->reentry_refused = 0;
+    st->request_shown = 0;
     st->status_at_start = (int)r->status;
     st->dt_at_start = r->dt;
     st->step_N = r->N;
@@ -1535,11 +1567,14 @@ static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
     // What this call began with, if a call began here, and whether it was
     // pfvi's own (read before the step changes the proposal).
     const int call_start = (r->dt_last_done == 0.), loaded = (st->end_N == 0);
+    const double dt_done_before = r->dt_last_done;
     const int fresh = loaded && st->dt_proposed == 0.;   // a new simulation: no step yet, none loaded
     st->call_is_integrate = call_start;
     // (Mid-run, sim.dt is the proposal: the rest is not asked.)
     const int began_proposed = st->dt_proposed != 0. && fabs(r->dt) == fabs(st->dt_proposed);
-    const int began_default = !began_proposed && st->dt_proposed == 0. && r->dt == PFVI_REBOUND_DT_DEFAULT;
+    // (integrate() turns sim.dt toward the requested time: a way back's -0.001 is REBOUND's too.)
+    const int began_default = !began_proposed && st->dt_proposed == 0.
+        && (r->dt == PFVI_REBOUND_DT_DEFAULT || (st->request_set && r->dt == -PFVI_REBOUND_DT_DEFAULT));
     const int began_restored_own = !began_proposed && !began_default && rebound_restored(r, st, 0);
     const int began_restored_default = !began_proposed && !began_default && !began_restored_own
         && rebound_restored(r, st, 1);
@@ -1576,10 +1611,22 @@ static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
             st->dt_call_first_cut = 1;
         }
     }
+    if (st->request_shown && st->dt_call_default){
+        // Shown on the requested time without REBOUND's finishing step:
+        // REBOUND restores the dt the call began with, its 0.001 here.
+        st->dt_call_first_cut = 1;
+    }
     // (A later call whose first step is its last began with what the call
     // before left: what is known of it stands.)
     if (!finishing){
         st->dt_rebound_leaves = r->dt;   // REBOUND keeps what the step left
+    }
+    if (st->request_shown && dt_done_before != 0.){
+        // (as REBOUND's finish would: its last full step; a call's first
+        // step leaves the dt the call began with, as REBOUND restores it)
+        st->dt_rebound_leaves = dt_done_before;
+        st->request_leaves = 1;
+        st->request_dt_leaves = dt_done_before;
     }
     pfvi_step_model_apply_pending(r, st);
     st->in_step = PFVI_STEP_IDLE;
@@ -1673,6 +1720,37 @@ int pfvi_density_of(struct reb_simulation* r, int stages, double* out){
     free(partners);
     free(scratch.images);
     return paired;
+}
+
+static struct pfvi_state* pfvi_state_of(struct reb_simulation* r){
+    return (r->integrator.callbacks.step == pfvi_step) ? r->integrator.state : NULL;
+}
+
+double pfvi_request_begin(struct reb_simulation* r, double t){
+    struct pfvi_state* const st = pfvi_state_of(r);
+    if (!st){
+        return NAN;
+    }
+    // (an enclosing call's, returned to be given back: a callback's integrate() is refused)
+    const double held = st->request_set ? st->request_t : NAN;
+    st->request_set = 1;
+    st->request_t = t;
+    st->request_leaves = 0;
+    return held;
+}
+
+void pfvi_request_end(struct reb_simulation* r, double held){
+    struct pfvi_state* const st = pfvi_state_of(r);
+    if (!st){
+        return;
+    }
+    if (st->request_set && st->request_leaves && r->exact_finish_time == 1 && st->in_step == PFVI_STEP_IDLE){
+        // The call ends: sim.dt as REBOUND's own finish on the time leaves it.
+        r->dt = st->request_dt_leaves;
+    }
+    st->request_leaves = 0;
+    st->request_set = !isnan(held);
+    st->request_t = st->request_set ? held : 0.;
 }
 
 const char* pfvi_rebound_version_compiled(void){
