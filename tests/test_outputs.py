@@ -399,6 +399,34 @@ def test_no_state_past_the_requested_time_is_shown(build, seed):
     assert sim.integrator.n_steps == one.integrator.n_steps
 
 
+@pytest.mark.parametrize("t_first", [0.1, -0.01])
+def test_steps_after_a_first_output_inside_the_first_step_go_on_with_the_run(t_first):
+    # A new simulation's first integrate() to a time inside its first step
+    # shows that time without REBOUND's finishing step; sim.dt after it is
+    # what that finish would leave (the run's step), not REBOUND's 0.001,
+    # which sim.steps() would take for a cap (a second hostile trial: after
+    # integrate(0.1), steps(3) ended at 0.101, 0.430, 0.999 instead of the
+    # run's 0.297, 0.760, 1.635).
+    def build():
+        sim = kepler(e=0.5)
+        sim.dt = math.copysign(sim.dt, t_first)
+        return sim
+    own = build()
+    ends = []
+    for _ in range(3):
+        own.steps(1)
+        ends.append(own.t)
+    sim = build()
+    sim.integrate(t_first)
+    assert sim.t == t_first
+    seen = []
+    for _ in range(3):
+        sim.steps(1)
+        seen.append(sim.t)
+    assert seen == ends
+    assert state(sim).tobytes() == state(own).tobytes()
+
+
 def approaching_body():
     # A star, a planet at e = 0.5 and a small body closing on it at relative
     # speed 1: 0.12 apart at t = 0.077, inside pfvi's first step (0.297).

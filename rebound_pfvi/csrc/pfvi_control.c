@@ -1242,8 +1242,11 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         shortened = 1;
         h = h_next;
         if (t0 + sign*h == t0){
+            // (flag: the last trial's solve converged; the step was retaken
+            // shorter for what its end showed, a closer approach)
             st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_NOT_CONVERGED, .n = (size_t)o->stages,
-                .value = st->trial.change, .rounds = st->trial.rounds, .t0 = t0};
+                .value = st->trial.change, .rounds = st->trial.rounds, .t0 = t0,
+                .flag = (trial != PFVI_TRIAL_NOT_CONVERGED)};
             return 0.;
         }
     }

@@ -538,14 +538,26 @@ static void pfvi_free(void* state){
 }
 
 // Reports an error through REBOUND; sim.integrate() raises it in Python.
-// REBOUND keeps at most 254 characters of a message.
+// REBOUND keeps at most REB_STRING_SIZE_MAX - 2 characters of a message and
+// cuts the rest anywhere (a hostile trial: "... smooth it, or "): a message
+// that long ends at its last whole clause that fits. (The messages are
+// written to fit with the widest numbers; this is the guard.)
 __attribute__((format(printf, 2, 3)))
 static void pfvi_error(struct reb_simulation* r, const char* fmt, ...){
-    char msg[REB_STRING_SIZE_MAX];
+    char msg[4*REB_STRING_SIZE_MAX];
     va_list args;
     va_start(args, fmt);
-    vsnprintf(msg, sizeof(msg), fmt, args);
+    const int n = vsnprintf(msg, sizeof(msg), fmt, args);
     va_end(args);
+    const size_t kept = REB_STRING_SIZE_MAX - 2;
+    if (n > 0 && (size_t)n > kept){
+        size_t end = 0;
+        for (size_t i=0; i + 1 < kept; i++){
+            end = ((msg[i] == '.' || msg[i] == ';' || msg[i] == ':') && msg[i+1] == ' ') ? i : end;
+        }
+        msg[end] = '.';
+        msg[end + 1] = '\0';
+    }
     reb_simulation_error(r, msg);
 }
 
@@ -602,14 +614,20 @@ static void pfvi_report(struct reb_simulation* r, const struct pfvi_state* st){
                     "cannot carry; step not taken, state restored. Use stages = 2 or larger time units.", f->h, f->n);
             break;
         case PFVI_FAULT_NOT_CONVERGED:
-            if (st->options.epsilon > 0.){
+            if (st->options.epsilon > 0. && f->flag){
+                // (A hostile trial: "did not converge (relative change 0)" for a
+                // pair closing to 5e-10, whose every trial had converged.)
+                pfvi_error(r, "pfvi: the step from t = %.17g was retaken shorter down to t's rounding, its end "
+                        "each time closer than it was sized for; not taken, state restored. Colliding? Give the "
+                        "bodies radii and set sim.collision (or exit_min_distance).", f->t0);
+            }else if (st->options.epsilon > 0.){
                 // (The control halved the step down to t's rounding: more
                 // steps would not help; forces that are not smooth can leave
                 // the stage equations without a solution.)
-                pfvi_error(r, "pfvi: the %zu-stage solve did not converge (relative change %.3g after %d iterations) "
-                        "in the step from t = %.17g, down to t's rounding; step not taken, state restored. A force "
-                        "that jumps or has a cusp there can leave no solution: smooth it, or take fixed steps "
-                        "(epsilon = 0).", f->n, f->value, (int)f->rounds, f->t0);
+                pfvi_error(r, "pfvi: the %zu-stage solve did not converge from t = %.17g (%d rounds, change %.3g) "
+                        "down to t's rounding; not taken, state restored. A force with a jump or cusp "
+                        "there may have no solution: smooth it, or set epsilon = 0.",
+                        f->n, f->t0, (int)f->rounds, f->value);
             }else{
                 pfvi_error(r, "pfvi: the %zu-stage solve did not converge (relative change %.3g after %d iterations) "
                         "in the step from t = %.17g; step not taken, state restored. Lower dt.",
@@ -629,7 +647,7 @@ static void pfvi_report(struct reb_simulation* r, const struct pfvi_state* st){
         case PFVI_FAULT_UNSTABLE:
             pfvi_error(r, "pfvi: particle %zu: the %zu-stage step fitted to the fixed omega = %.6g is unstable at "
                     "dt = %.6g against the pull it feels (frequency %.6g): a deviation grows by a factor 1 + %.3g "
-                    "per step; step not taken, state restored. Use an omega near the motion's, a smaller dt, or "
+                    "per step; not taken, state restored. Use omega near the motion's, a smaller dt, or "
                     "frequency = 'curvature'.", f->particle, f->n, f->value, f->h, f->bound, f->growth);
             break;
         case PFVI_FAULT_CALLBACK_CHANGED:
@@ -1156,10 +1174,15 @@ static int user_set_dt(const struct reb_simulation* r, const struct pfvi_state* 
 }
 
 // A call that would pass integrate()'s requested time finishes on it.
-static void request_finish(struct pfvi_state* st, struct pfvi_call* c){
+// passed: the dt_last_done the state past it would have been shown with,
+// which REBOUND's finish on the time would then have kept as its last full
+// step and left as sim.dt (pfvi_request_end leaves it; 0: REBOUND's restore
+// of the dt the call began with stands, as it would).
+static void request_finish(struct pfvi_state* st, struct pfvi_call* c, double passed){
     c->finishing = 1;
     c->t_target = c->request;
     st->request_shown = 1;
+    st->request_dt_leaves = passed;
 }
 
 static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_call* c){
@@ -1217,8 +1240,15 @@ static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st
     c->bounded = !c->finishing && c->eligible && st->request_set && r->exact_finish_time == 1
         && (st->request_t - r->t)*r->dt > 0.;
     c->request = st->request_t;
+    if (c->finishing && c->eligible && st->request_set && r->exact_finish_time == 1 && c->t_target != c->request
+            && fabs(c->t_target - c->request) <= PFVI_OUTPUT_NEAR_ULPS*DBL_EPSILON*fmax(fabs(c->request), fabs(r->t))){
+        // REBOUND's cut, t + (t_request - t), rounds a place or two from the
+        // time asked for (a hook saw t a place past it): shown on the time itself.
+        c->t_target = c->request;
+    }
     if (c->bounded && c->shown && (st->output_t_real - c->request)*r->dt > 0.){
-        request_finish(st, c);
+        // (the take-up's: pfvi_shown_dt_done of a step on)
+        request_finish(st, c, (pfvi_contact_line(r) && pfvi_contact_enabled(r)) ? 0. : c->proposed);
     }
     if (c->shown){
         return PFVI_GLUE_TAKE_UP;
@@ -1387,7 +1417,7 @@ static enum pfvi_glue glue_step(struct reb_simulation* r, struct pfvi_state* st,
     st->output_N = 0;  // the simulation holds the run's state
     st->output_contact_pending = 0;
     if (c->bounded && !c->finishing && (r->t - c->request)*h > 0.){
-        request_finish(st, c);   // (the run's step as REBOUND's own decision had it)
+        request_finish(st, c, r->dt_last_done);   // (the run's step as REBOUND's own decision had it)
         return PFVI_GLUE_SHOW_PASSED;
     }
     return (c->dense && c->finishing && (r->t - c->t_target)*h > 0.) ? PFVI_GLUE_SHOW_PASSED : PFVI_GLUE_DONE;
@@ -1567,14 +1597,12 @@ static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
     // What this call began with, if a call began here, and whether it was
     // pfvi's own (read before the step changes the proposal).
     const int call_start = (r->dt_last_done == 0.), loaded = (st->end_N == 0);
-    const double dt_done_before = r->dt_last_done;
     const int fresh = loaded && st->dt_proposed == 0.;   // a new simulation: no step yet, none loaded
     st->call_is_integrate = call_start;
     // (Mid-run, sim.dt is the proposal: the rest is not asked.)
     const int began_proposed = st->dt_proposed != 0. && fabs(r->dt) == fabs(st->dt_proposed);
-    // (integrate() turns sim.dt toward the requested time: a way back's -0.001 is REBOUND's too.)
     const int began_default = !began_proposed && st->dt_proposed == 0.
-        && (r->dt == PFVI_REBOUND_DT_DEFAULT || (st->request_set && r->dt == -PFVI_REBOUND_DT_DEFAULT));
+        && r->dt == PFVI_REBOUND_DT_DEFAULT;
     const int began_restored_own = !began_proposed && !began_default && rebound_restored(r, st, 0);
     const int began_restored_default = !began_proposed && !began_default && !began_restored_own
         && rebound_restored(r, st, 1);
@@ -1611,22 +1639,17 @@ static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
             st->dt_call_first_cut = 1;
         }
     }
-    if (st->request_shown && st->dt_call_default){
-        // Shown on the requested time without REBOUND's finishing step:
-        // REBOUND restores the dt the call began with, its 0.001 here.
-        st->dt_call_first_cut = 1;
-    }
     // (A later call whose first step is its last began with what the call
     // before left: what is known of it stands.)
     if (!finishing){
         st->dt_rebound_leaves = r->dt;   // REBOUND keeps what the step left
     }
-    if (st->request_shown && dt_done_before != 0.){
-        // (as REBOUND's finish would: its last full step; a call's first
-        // step leaves the dt the call began with, as REBOUND restores it)
-        st->dt_rebound_leaves = dt_done_before;
+    if (st->request_shown && st->request_dt_leaves != 0.){
+        // Shown on the requested time where REBOUND's finish would have come
+        // after the state past it: what that finish knows (as at its first
+        // finishing step, above), and sim.dt as it would leave it.
+        st->dt_rebound_leaves = st->request_dt_leaves;
         st->request_leaves = 1;
-        st->request_dt_leaves = dt_done_before;
     }
     pfvi_step_model_apply_pending(r, st);
     st->in_step = PFVI_STEP_IDLE;
