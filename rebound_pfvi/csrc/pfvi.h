@@ -1284,15 +1284,15 @@ struct pfvi_state {
     // The time the running integrate() was asked for (pfvi_request_begin,
     // which rebound_pfvi's sim.integrate calls around REBOUND's): REBOUND
     // decides whether a step finishes by comparing t + sim.dt with it, and
-    // pfvi's step may be longer than sim.dt, so a step that passes it shows
-    // it as a finishing step would. Not set: REBOUND's decision alone.
+    // what pfvi shows next may lie further, so a state that would pass it
+    // shows it as a finishing step would. Not set: REBOUND's decision alone.
     int request_set;
     double request_t;
     int request_shown;      // this step call showed it (pfvi_integrator.c)
-    // What REBOUND's own finish would have left as sim.dt after the call (the
-    // dt_last_done before the step that showed the time; REBOUND, which did
-    // not finish, restores the dt the call began with): set as the call ends.
-    int request_leaves;
+    // Where it was shown, what REBOUND's own finish would have left as sim.dt
+    // (the dt_last_done the state past the time would have been shown with;
+    // REBOUND, which did not finish, restores the dt the call began with):
+    // set as the call ends. 0: REBOUND's restore stands.
     double request_dt_leaves;
     // The sim.dt REBOUND leaves after an integrate() that ended on an output
     // (its last full step: the dt_last_done before the finishing step, or

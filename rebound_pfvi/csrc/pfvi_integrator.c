@@ -1231,9 +1231,9 @@ static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st
     // (A value of REBOUND's own would cap the next step.)
     c->proposed = (st->dt_proposed != 0.) ? st->dt_proposed : c->dt_entry;
     // REBOUND decided this step does not finish because t + sim.dt falls
-    // short of the requested time; pfvi's step may be longer than sim.dt
-    // (its first, or a symmetric step longer than it proposed), and the run's
-    // end taken up may lie past it. Neither is shown: REBOUND's collision
+    // short of the requested time; pfvi's step may be longer than sim.dt (a
+    // new simulation's first), and the run's end taken up after an output
+    // may lie past it. Neither is shown: REBOUND's collision
     // search, Encounter, Escape, heartbeat and archive would see a time the
     // call never reaches (a hostile trial: Encounter raised at t = 0.077 by
     // integrate(0.01)). The time is shown as a finishing step shows it.
@@ -1601,8 +1601,7 @@ static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
     st->call_is_integrate = call_start;
     // (Mid-run, sim.dt is the proposal: the rest is not asked.)
     const int began_proposed = st->dt_proposed != 0. && fabs(r->dt) == fabs(st->dt_proposed);
-    const int began_default = !began_proposed && st->dt_proposed == 0.
-        && r->dt == PFVI_REBOUND_DT_DEFAULT;
+    const int began_default = !began_proposed && st->dt_proposed == 0. && r->dt == PFVI_REBOUND_DT_DEFAULT;
     const int began_restored_own = !began_proposed && !began_default && rebound_restored(r, st, 0);
     const int began_restored_default = !began_proposed && !began_default && !began_restored_own
         && rebound_restored(r, st, 1);
@@ -1647,9 +1646,8 @@ static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
     if (st->request_shown && st->request_dt_leaves != 0.){
         // Shown on the requested time where REBOUND's finish would have come
         // after the state past it: what that finish knows (as at its first
-        // finishing step, above), and sim.dt as it would leave it.
+        // finishing step, above); pfvi_request_end leaves it as sim.dt.
         st->dt_rebound_leaves = st->request_dt_leaves;
-        st->request_leaves = 1;
     }
     pfvi_step_model_apply_pending(r, st);
     st->in_step = PFVI_STEP_IDLE;
@@ -1758,7 +1756,7 @@ double pfvi_request_begin(struct reb_simulation* r, double t){
     const double held = st->request_set ? st->request_t : NAN;
     st->request_set = 1;
     st->request_t = t;
-    st->request_leaves = 0;
+    st->request_dt_leaves = 0.;
     return held;
 }
 
@@ -1767,11 +1765,12 @@ void pfvi_request_end(struct reb_simulation* r, double held){
     if (!st){
         return;
     }
-    if (st->request_set && st->request_leaves && r->exact_finish_time == 1 && st->in_step == PFVI_STEP_IDLE){
+    if (st->request_set && st->request_dt_leaves != 0. && r->exact_finish_time == 1
+            && st->in_step == PFVI_STEP_IDLE){
         // The call ends: sim.dt as REBOUND's own finish on the time leaves it.
         r->dt = st->request_dt_leaves;
     }
-    st->request_leaves = 0;
+    st->request_dt_leaves = 0.;
     st->request_set = !isnan(held);
     st->request_t = st->request_set ? held : 0.;
 }
