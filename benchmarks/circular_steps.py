@@ -1,7 +1,7 @@
 """Where a near-circular orbit's steps could be longer, and why they are not
 (issue 42; docs/performance.md, "Longer steps for near-circular orbits").
 
-    python -P benchmarks/circular_steps.py [--parts pairs,comet]
+    python -P benchmarks/circular_steps.py [--parts pairs,comet,planets]
 
 pairs: Kepler pairs (m = 1e-6 about 1, a = 1, from pericentre, 100 orbits)
 at pfvi's defaults, epsilon 1e-6 and 1e-9: steps per orbit and the
@@ -15,6 +15,11 @@ relative position error against IAS15 at 1e-13, for pfvi at several
 epsilon and IAS15 at its loosest settings, and where the first comet
 orbit's steps lie (by the comet's distance from the Sun).
 
+planets: the comet's planets without it, Venus with each of the others
+(moved to their barycentre, 20 comet periods): Venus's final relative
+position error against IAS15 at 1e-13, at the defaults. It tells which
+pull sets the steps Venus needs.
+
 With PFVI_EXP_M / PFVI_EXP_EC read by a build patched as docs/performance.md
 describes (not in the tree), the same script measures the longer steps.
 """
@@ -27,6 +32,7 @@ import numpy as np
 import rebound
 
 import rebound_pfvi  # noqa: F401  (registers "pfvi")
+from rebound_pfvi import scenes
 from rebound_pfvi.verdict import relative_position_error
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -94,12 +100,35 @@ def comet():
         print(f"| {integrator} | {epsilon:.0e} | {len(distances)} | " + " | ".join(str(c) for c in counts) + " |")
 
 
+def planets():
+    scene = outputs.Encke()
+    print("| bodies | steps | Venus's error |")
+    print("|---|---|---|")
+    for label, keep in (("Sun, Venus", (0, 1)), ("Sun, Venus, Earth", (0, 1, 2)),
+                        ("Sun, Venus, Jupiter", (0, 1, 4)), ("Sun and the four planets", (0, 1, 2, 3, 4))):
+        runs = []
+        for integrator, epsilon in (("ias15", 1e-13), ("pfvi", 1e-6)):
+            whole = scene.build()
+            sim = scenes.new_simulation()   # (the scene's units)
+            for i in keep:
+                sim.add(whole.particles[i].copy())
+            sim.move_to_com()
+            sim.integrator = integrator
+            sim.integrator.epsilon = epsilon
+            sim.integrate(scene.t_end)
+            runs.append(sim)
+        reference, sim = runs
+        error = relative_position_error([[p.x, p.y, p.z] for p in sim.particles][:2],
+                                        [[p.x, p.y, p.z] for p in reference.particles][:2])
+        print(f"| {label} | {sim.steps_done} | {error:.1e} |")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--parts", default="pairs,comet")
+    parser.add_argument("--parts", default="pairs,comet,planets")
     args = parser.parse_args()
     for part in args.parts.split(","):
-        {"pairs": pairs, "comet": comet}[part]()
+        {"pairs": pairs, "comet": comet, "planets": planets}[part]()
         print()
 
 
