@@ -224,3 +224,42 @@ def test_documentation_lists_every_field():
     assert (sim.integrator.fitting, sim.integrator.frequency, sim.integrator.centre, sim.integrator.stages,
             sim.integrator.u_max, sim.integrator.omega, sim.integrator.epsilon,
             sim.integrator.step_control) == ("none", "mean-motion", "partner", 8, 1.0, 0.0, 1e-6, "symmetric")
+
+
+@pytest.mark.parametrize("direction", [1.0, -1.0])
+@pytest.mark.parametrize("variational", [False, True])
+def test_an_archive_begun_after_an_output_opens_and_every_snapshot_continues_the_run(tmp_path, direction,
+                                                                                      variational):
+    # REBOUND stores each snapshot after the first as a difference from the
+    # first; a buffer saved there (a shown output's) and empty later was
+    # written as a field header without its data, and opening the file
+    # crashed REBOUND's reader (a hostile trial). Opened in a child process,
+    # so that the old crash fails this test instead of the suite.
+    archive = tmp_path / "begun-mid-run.bin"
+    code = f"""
+        import rebound, rebound_pfvi
+        sim = rebound.Simulation()
+        sim.add(m=1.0)
+        sim.add(m=1e-3, a=1.0, e=0.5)
+        sim.add(m=1e-4, a=2.0, e=0.1, inc=0.2)
+        sim.add(m=0.0, a=1.5, e=0.6)
+        sim.move_to_com()
+        sim.integrator = "pfvi"
+        if {variational}:
+            sim.init_megno(seed=3)
+        sim.integrate(10.0)            # an output shown: its buffers are saved in the first snapshot
+        sim.save_to_file({str(archive)!r}, interval=1.0, delete_file=True)
+        end = 10.0 + {direction}*6.0
+        sim.integrate(end)
+        final = [p.xyz + p.vxyz for p in sim.particles]
+        archive = rebound.Simulationarchive({str(archive)!r})
+        assert len(archive) >= 6, len(archive)
+        for k in range(len(archive)):
+            again = archive[k]
+            again.integrate(end)
+            assert again.t == sim.t, (k, again.t, sim.t)
+            assert [p.xyz + p.vxyz for p in again.particles] == final, k
+        print("ok", len(archive))
+    """
+    out = run_python(code)
+    assert out.returncode == 0 and out.stdout.startswith("ok"), (out.returncode, out.stdout, out.stderr[-2000:])

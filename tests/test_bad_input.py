@@ -71,11 +71,39 @@ def test_invalid_omega_with_fixed_frequency(omega, stages):
     assert_refused(sim, r"integrator\.omega = .* with frequency 'fixed'")
 
 
-def test_negative_omega_is_ignored_with_curvature_frequency(stages):
+@pytest.mark.parametrize("omega", [-1.0, math.nan, math.inf])
+def test_invalid_omega_is_refused_before_frequency_fixed_reads_it(omega, stages):
+    # (A value set and not yet read is refused now, not later when
+    # frequency 'fixed' is chosen: a hostile trial ran to the end with NaN.)
     sim = pfvi_sim(stages)
-    sim.integrator.omega = -1.0
-    sim.integrate(0.6)
-    assert sim.t == 0.6
+    sim.integrator.omega = omega
+    assert_refused(sim, r"integrator\.omega = .* \(read with frequency 'fixed'\); it must be finite and >= 0")
+
+
+@pytest.mark.parametrize("radius", [math.nan, math.inf, -1.0])
+@pytest.mark.parametrize("collision", ["direct", "line"])
+def test_a_radius_that_is_not_a_size_is_refused_with_collisions_on(radius, collision):
+    # A NaN radius met a contact at any distance (pfvi's search inside the
+    # step and REBOUND's own), a negative one at none in pfvi and below
+    # |r| in REBOUND's squared sum.
+    sim = two_body(1e-3, e=0.3, com=True)
+    sim.add(m=1e-4, a=2.0, e=0.1, primary=sim.particles[0])
+    sim.integrator = "pfvi"
+    sim.collision = collision
+    sim.integrate(0.5)
+    sim.particles[2].r = radius
+    assert_refused(sim, rf"particle 2 has r = {radius:g}; with collisions on, a radius must be finite and >= 0")
+    sim.particles[2].r = 0.0
+    sim.integrate(1.0)
+    assert sim.t == 1.0
+
+
+def test_a_radius_is_not_read_without_collisions():
+    sim = two_body(1e-3, e=0.3, com=True)
+    sim.integrator = "pfvi"
+    sim.particles[1].r = math.nan
+    sim.integrate(1.0)
+    assert sim.t == 1.0
 
 
 def test_unknown_enum_name_names_the_allowed_values(stages):

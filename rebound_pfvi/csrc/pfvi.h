@@ -1378,6 +1378,15 @@ struct pfvi_state {
     struct pfvi_output_particle* output_var_real;   // the variational particles likewise
     struct pfvi_output_particle* output_var_shown;
     size_t output_var_N;
+    // What archives save of the two pairs of buffers above: their allocated
+    // length, never 0 once allocated (output_N and output_var_N are saved as
+    // fields of their own). REBOUND's archive stores each snapshot after the
+    // first as a difference from the first, and a buffer present there but
+    // empty later was written as a field header without its data: the file
+    // then crashed REBOUND's reader (a hostile trial: an archive begun
+    // after an output).
+    size_t output_saved_N;
+    size_t output_var_saved_N;
     double output_megno[2][2];     // REBOUND's megno_Ys and megno_Yss: the run's [0] and shown [1]
     double output_t;
     double output_t_real;

@@ -152,7 +152,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "gravity off, G = 0 or no other massive body (an external field) a particle's centre is the "
       "origin. Not used with fitting 'none'. Type: text. Default 'partner'.",
       REB_INT, "centre", offsetof(struct pfvi_state, settings.centre), 0, 0, pfvi_centre_enum },
-    PFVI_OPTION("Frequency used when frequency = 'fixed' (code units of 1/time, finite, >= 0). A fitted "
+    PFVI_OPTION("Frequency used when frequency = 'fixed' (code units of 1/time, finite, >= 0: checked "
+        "whatever the frequency, so a bad value is refused when set, not when 'fixed' reads it). A fitted "
         "step far from the motion's frequency adds a repulsive force it does not show: each step with a "
         "fixed omega is checked on every particle's pull towards its centre and refused, naming the "
         "particle, where a deviation would grow. Default 0.",
@@ -190,7 +191,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "a sungrazer, a circumbinary planet, the outer solar system and a periodic box; over Kepler pairs "
         "of e = 0.1 ... 0.95 from 8 phases, 100 orbits, within 0.53 times at the default and 0.9 at 1e-9 "
         "... 3e-8, but 11.6 and 7.7 at 1e-7 and 1e-8 where an orbit takes within a few hundredths of a "
-        "whole number of steps and the orbits' errors add up (rebound_pfvi's docs, step control). Steps are kappa/rho with kappa = (epsilon/C_s)^(1/(2s - 2)) and rho "
+        "whole number of steps and the orbits' errors add up (off that grid, 10 at 1e-7 over 100 orbits of e = 0.70 "
+        "at 10.01 steps an orbit, 16 at its worst output; rebound_pfvi's docs, step control). Steps are kappa/rho with kappa = (epsilon/C_s)^(1/(2s - 2)) and rho "
         "following a density of the system's time scales (see step_control). Epsilon is held within "
         "what s stages deliver: above C_s " PFVI_STR(PFVI_KAPPA_MAX) "^(2s - 2) (s = 8: 1.2e-7, s = 6: 4.4e-5, "
         "s = 4: 0.019) kappa is at its cap of " PFVI_STR(PFVI_KAPPA_MAX) " (the stage solve converges "
@@ -372,13 +374,15 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "t_compensation", offsetof(struct pfvi_state, t_compensation), 0, 0, 0 },
     { "", REB_DOUBLE, "t_compensated", offsetof(struct pfvi_state, t_compensated), 0, 0, 0 },
     { "", REB_POINTER, "output_real", offsetof(struct pfvi_state, output_real),
-        offsetof(struct pfvi_state, output_N), sizeof(struct pfvi_output_particle), 0 },
+        offsetof(struct pfvi_state, output_saved_N), sizeof(struct pfvi_output_particle), 0 },
     { "", REB_POINTER, "output_shown", offsetof(struct pfvi_state, output_shown),
-        offsetof(struct pfvi_state, output_N), sizeof(struct pfvi_output_particle), 0 },
+        offsetof(struct pfvi_state, output_saved_N), sizeof(struct pfvi_output_particle), 0 },
     { "", REB_POINTER, "output_var_real", offsetof(struct pfvi_state, output_var_real),
-        offsetof(struct pfvi_state, output_var_N), sizeof(struct pfvi_output_particle), 0 },
+        offsetof(struct pfvi_state, output_var_saved_N), sizeof(struct pfvi_output_particle), 0 },
     { "", REB_POINTER, "output_var_shown", offsetof(struct pfvi_state, output_var_shown),
-        offsetof(struct pfvi_state, output_var_N), sizeof(struct pfvi_output_particle), 0 },
+        offsetof(struct pfvi_state, output_var_saved_N), sizeof(struct pfvi_output_particle), 0 },
+    { "", REB_UINT64, "output_count", offsetof(struct pfvi_state, output_N), 0, 0, 0 },
+    { "", REB_UINT64, "output_var_count", offsetof(struct pfvi_state, output_var_N), 0, 0, 0 },
     { "", REB_POINTER, "output_check", offsetof(struct pfvi_state, output_check),
         offsetof(struct pfvi_state, output_check_N), sizeof(struct pfvi_output_check), 0 },
     { "", REB_DOUBLE, "output_exit_min_distance", offsetof(struct pfvi_state, output_exit_min_distance), 0, 0, 0 },
@@ -468,7 +472,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "force evaluations are in n_force_evaluations.",
         REB_UINT64, n_outputs),
     PFVI_STATISTIC("steps retaken to end at a contact inside them: with collisions on (sim.collision not "
-        "'none') and a radius set, or sim.exit_min_distance set, each step taken is searched for the first "
+        "'none') and a radius set (radii must then be finite and >= 0: a NaN or negative one is refused by "
+        "name), or sim.exit_min_distance set, each step taken is searched for the first "
         "time two bodies come closer than the sum of their radii or exit_min_distance, along the "
         "polynomial through its stages (positions and accelerations at its nodes, velocities at its "
         "ends; candidate pairs by a bound from each body's nodes); the step is retaken to end there, "
@@ -729,8 +734,11 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_option
                 o->stages, PFVI_STAGES_MIN, PFVI_STAGES_MAX);
         return 0;
     }
-    if (o->frequency == PFVI_FREQUENCY_FIXED && !(isfinite(o->omega) && o->omega >= 0.)){
-        pfvi_error(r, "pfvi: integrator.omega = %g is not valid with frequency 'fixed'; it must be finite and >= 0.", o->omega);
+    if (!(isfinite(o->omega) && o->omega >= 0.)){
+        // (Checked whatever the frequency: a value set and not yet used is
+        // refused now, not when frequency 'fixed' is chosen later.)
+        pfvi_error(r, "pfvi: integrator.omega = %g is not valid%s; it must be finite and >= 0.", o->omega,
+                (o->frequency == PFVI_FREQUENCY_FIXED) ? " with frequency 'fixed'" : " (read with frequency 'fixed')");
         return 0;
     }
     if (!(o->u_max > 0. && o->u_max < M_PI)){
@@ -767,6 +775,20 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_option
         pfvi_error(r, "pfvi: sim.N_active = %zu is larger than sim.N = %zu; it must be at most N (or -1: all "
                 "active). Step not taken.", r->N_active, r->N);
         return 0;
+    }
+    if (r->collision != REB_COLLISION_NONE){
+        // The contact search inside the step reads radii above 0 as bodies
+        // (pfvi_contact.c), REBOUND's own search squares their sum: a radius
+        // that is NaN or negative met a contact at any distance in one and at
+        // none in the other (a hostile trial). Refused by name instead.
+        for (size_t i=0; i<r->N; i++){
+            const double radius = r->particles[i].r;
+            if (!(isfinite(radius) && radius >= 0.)){
+                pfvi_error(r, "pfvi: particle %zu has r = %g; with collisions on, a radius must be finite and >= 0 "
+                        "(0: a point). Step not taken.", i, radius);
+                return 0;
+            }
+        }
     }
     if (!(r->exit_min_distance >= 0.) || isinf(r->exit_min_distance)){
         // REBOUND squares it, so a negative one would stop its own check but

@@ -151,6 +151,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->output_real = pfvi_grow(st->output_real, N*sizeof(*st->output_real), &ok);
     st->output_shown = pfvi_grow(st->output_shown, N*sizeof(*st->output_shown), &ok);
     st->output_check = pfvi_grow(st->output_check, N*sizeof(*st->output_check), &ok);
+    st->output_saved_N = ok ? N : st->output_saved_N;
     if (st->output_N > N){
         st->output_N = 0;  // as the predictor's, after an archive with fewer particles
     }
@@ -213,6 +214,7 @@ int pfvi_var_scratch(struct pfvi_state* st, size_t n){
     st->var_dv = pfvi_grow(st->var_dv, n*sizeof(*st->var_dv), &ok);
     st->output_var_real = pfvi_grow(st->output_var_real, n*sizeof(*st->output_var_real), &ok);
     st->output_var_shown = pfvi_grow(st->output_var_shown, n*sizeof(*st->output_var_shown), &ok);
+    st->output_var_saved_N = ok ? n : st->output_var_saved_N;
     if (st->output_var_N > n){
         st->output_var_N = 0;
         st->output_N = 0;
