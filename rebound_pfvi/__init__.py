@@ -83,6 +83,9 @@ _OPTIONS, _STATISTICS = _fields()
 #: pfvi's options as a new simulation has them, from the C core (the one
 #: source: the comparisons, the stability cases and the examples read them here).
 DEFAULTS: Dict[str, Any] = {name: value for name, (value, _) in _OPTIONS.items()}
+# What an option takes, named in the error for a value of the wrong type.
+_FIELD_KINDS = {name: {int: "an int", float: "a real number", str: "one of its names, a string"}[type(value)]
+                for name, value in DEFAULTS.items()}
 
 
 def _first_sentence(text: str) -> str:
@@ -195,7 +198,17 @@ def _refuse_integers_that_wrap():
             if low is not None and not low <= value <= high:
                 raise ValueError(f"integrator.{name} = {value} does not fit the field's C type "
                                  f"({low} to {high}); not set")
-        generic(self, name, value)
+        if self.name != INTEGRATOR_NAME.encode():
+            return generic(self, name, value)
+        try:
+            generic(self, name, value)
+        except TypeError as error:
+            # (ctypes says only "'float' object cannot be interpreted as an
+            # integer": the user should learn which field and what it takes)
+            kind = _FIELD_KINDS.get(name)
+            wanted = f"; it takes {kind}" if kind else ""
+            raise TypeError(f"integrator.{name} = {value!r} has the wrong type{wanted}; not set "
+                            f"({error})") from None
 
     __setattr__._pfvi = True
     IntegratorConfiguration.__setattr__ = __setattr__

@@ -259,10 +259,21 @@ def test_unknown_field_and_wrong_types_raise_in_python():
     sim = pfvi_sim()
     with pytest.raises(AttributeError, match="foo"):
         sim.integrator.foo = 1
-    with pytest.raises(TypeError):
+    with pytest.raises(TypeError, match=r"integrator.stages = 'four' has the wrong type; it takes an int"):
         sim.integrator.stages = "four"
-    with pytest.raises(TypeError):
+    with pytest.raises(TypeError, match=r"integrator.epsilon = 'small' has the wrong type; it takes a real"):
         sim.integrator.epsilon = "small"
+
+
+@pytest.mark.parametrize("field, value", [("stages", 2.5), ("stages", "8"), ("epsilon", None),
+                                          ("omega", [1.0]), ("u_max", "1")])
+def test_a_value_of_the_wrong_type_names_the_field_and_sets_nothing(field, value):
+    sim = pfvi_sim()
+    sim.integrator.stages = 6
+    before = {name: getattr(sim.integrator, name) for name in rebound_pfvi.DEFAULTS}
+    with pytest.raises(TypeError, match=rf"integrator\.{field} = .* has the wrong type; it takes "):
+        setattr(sim.integrator, field, value)
+    assert {name: getattr(sim.integrator, name) for name in rebound_pfvi.DEFAULTS} == before
 
 
 @pytest.mark.parametrize("epsilon", [0.0, 1e-6])
