@@ -814,6 +814,14 @@ def _positive(number: float, name: str, given: Any = None) -> float:
     return number
 
 
+def _reboundx_installed() -> bool:
+    try:
+        import reboundx  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
 def _reboundx(what: str = "scene 'mercury-gr'") -> Any:
     """REBOUNDx, imported on first use, or an error naming the extra."""
     try:
@@ -1065,11 +1073,7 @@ def solar_system(epoch: Any = 2451545.0, gr: Optional[bool] = None) -> rebound.S
     """
     jd1, jd2 = de421_epoch(epoch)
     if gr is None:
-        try:
-            import reboundx  # noqa: F401
-            gr = True
-        except ImportError:
-            gr = False
+        gr = _reboundx_installed()
     gm = de421_gm()
     pos, vel = de421_states(jd1, jd2)
     sim = new_simulation()
@@ -1154,12 +1158,10 @@ class SolarSystem(Scene):
                              f"DE421's span ends (JD {end:.1f}, {_jd_text(end)})")
         if self.every > self.years * 365.25:
             raise ValueError(f"every={every!r} days is longer than the run ({self.years:g} yr)")
+        # (None without REBOUNDx is Newtonian, and the report says how to get GR)
+        self.gr_missing = gr is None and not _reboundx_installed()
         if gr is None:
-            try:
-                import reboundx  # noqa: F401
-                gr = True
-            except ImportError:
-                gr = False
+            gr = not self.gr_missing
         elif gr:
             _reboundx("scene 'solar-system' with gr=True")
         self.gr = bool(gr)
@@ -1245,7 +1247,9 @@ class SolarSystem(Scene):
         return (f"Solar system from DE421: the Sun, eight planets, the Moon and Pluto from JD {self.epoch:.1f} TDB "
                 f"({_jd_text(self.epoch)}), {self.years:g} yr with an output every {self.every:g} days (fixed "
                 f"steps counted per output), "
-                f"{'GR (REBOUNDx gr_full)' if self.gr else 'Newtonian (no GR)'}")
+                + ("GR (REBOUNDx gr_full)" if self.gr else
+                   "Newtonian (no GR: REBOUNDx is not installed; pip install \"rebound_pfvi[reboundx]\" for GR)"
+                   if self.gr_missing else "Newtonian (no GR)"))
 
 
 SCENES[SolarSystem.name] = SolarSystem

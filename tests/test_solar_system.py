@@ -134,6 +134,18 @@ def test_scene_outputs_and_their_interval():
 
 
 @needs_ephemeris
+def test_without_reboundx_the_scene_is_newtonian_and_says_how_to_get_gr(monkeypatch):
+    monkeypatch.setitem(sys.modules, "reboundx", None)  # import reboundx now fails
+    told = 'Newtonian (no GR: REBOUNDx is not installed; pip install "rebound_pfvi[reboundx]" for GR)'
+    scene = scenes.SolarSystem(years=1)
+    assert scene.gr is False and scene.describe().endswith(told)
+    asked = scenes.SolarSystem(years=1, gr=False)   # Newtonian by choice: nothing to install
+    assert asked.describe().endswith("Newtonian (no GR)")
+    with pytest.raises(ImportError, match=r'rebound_pfvi\[reboundx\]'):
+        scenes.SolarSystem(years=1, gr=True)
+
+
+@needs_ephemeris
 def test_run_past_de421s_end_is_refused():
     start, end = scenes.de421_span()
     with pytest.raises(ValueError, match=r"years=10: the run would end .* after DE421's span ends"):
