@@ -993,8 +993,11 @@ def de421_epoch(epoch: Any) -> Tuple[float, float]:
             raise ValueError(f"epoch={epoch!r} is not a date astropy can read; give an ISO date such as "
                              "\"2000-01-01 12:00\" (TDB), a Julian date (TDB) or an astropy Time") from None
         jd1, jd2 = float(tdb.jd1), float(tdb.jd2)
-    else:
+    elif isinstance(epoch, (int, float)) or hasattr(epoch, "unit") or hasattr(epoch, "__float__"):
         jd1, jd2 = _number(epoch, "epoch"), 0.0
+    else:
+        raise ValueError(f"epoch={epoch!r} is not an epoch; give an astropy Time, a Julian date (TDB) or an "
+                         "ISO date such as \"2000-01-01 12:00\" (TDB)")
     start, end = de421_span()
     jd = jd1 + jd2
     if not start <= jd <= end:

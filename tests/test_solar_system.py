@@ -112,7 +112,11 @@ def test_epoch_outside_de421_names_it_and_the_span(epoch, shown):
 
 @needs_ephemeris
 @pytest.mark.parametrize("epoch, match", [("yesterday", "not a date astropy can read"), (True, "not an epoch"),
-                                          (float("nan"), "not finite")])
+                                          (float("nan"), "not finite"),
+                                          (None, r"epoch=None is not an epoch; give an astropy Time, a Julian date "
+                                                 r"\(TDB\) or an ISO date such as"),
+                                          ([2451545.0], r"epoch=\[2451545.0\] is not an epoch"),
+                                          (b"2000-01-01", r"epoch=b'2000-01-01' is not an epoch")])
 def test_bad_epochs_are_named(epoch, match):
     with pytest.raises(ValueError, match=match):
         scenes.solar_system(epoch)
