@@ -238,6 +238,9 @@ def _tell_the_requested_time():
     def integrate(self, tmax, exact_finish_time=1):
         if self.integrator.name != name:
             return generic(self, tmax, exact_finish_time)
+        if isinstance(tmax, float) and tmax != tmax:
+            # (REBOUND would step for ever: no t reaches NaN, and none passes it)
+            raise ValueError("sim.integrate(tmax): tmax is NaN; nothing integrated")
         try:
             held = begin(address(self), tmax)
         except _ctypes.ArgumentError:

@@ -1,6 +1,8 @@
 """Bad input: a clear error naming the problem, and nothing lost."""
 import math
 import re
+import subprocess
+import sys
 
 import pytest
 import rebound
@@ -421,3 +423,26 @@ def test_a_refusal_is_seen_with_rebounds_message_queue_full():
     with pytest.raises(RuntimeError):
         sim.steps(5)
     assert snapshot(sim) == before and calls["post"] == counted
+
+
+def test_integrate_to_nan_is_refused_not_stepped_for_ever():
+    # (in a child process: without the check it never returns)
+    code = """if True:
+        import math, rebound, rebound_pfvi, numpy
+        sim = rebound.Simulation(); sim.add(m=1); sim.add(m=1e-3, a=1, e=0.5); sim.integrator = "pfvi"
+        sim.integrate(0.5)
+        before = (sim.t, [p.xyz + p.vxyz for p in sim.particles])
+        for tmax in (math.nan, numpy.float64("nan")):
+            try:
+                sim.integrate(tmax)
+            except ValueError as error:
+                assert str(error) == "sim.integrate(tmax): tmax is NaN; nothing integrated", error
+            else:
+                raise AssertionError("integrate(nan) returned")
+            assert (sim.t, [p.xyz + p.vxyz for p in sim.particles]) == before
+        sim.integrate(1.0)
+        print("ok", sim.t)
+    """
+    done = subprocess.run([sys.executable, "-P", "-c", code], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["ok", "1.0"]
