@@ -17,7 +17,7 @@ both: the largest relative energy error over the run, and the relative
 position error, i.e. the largest error of a body's position relative to
 particle 0 divided by that body's reference distance from particle 0 (the
 size of its orbit where it is at the end; for a single body, its distance
-from the origin). Relative measures make one tolerance mean the same for an
+from the origin; a scene's moons about their planets instead). Relative measures make one tolerance mean the same for an
 orbit of 0.01 AU and one of 10 AU. The default, 1e-2 in both, marks a run
 whose orbit is wrong by more than a percent, so an O(1) error can never be
 called "accurate"; the error itself is in the tables, so the verdict is a
@@ -57,24 +57,32 @@ class Tolerance:
 
     def describe(self) -> str:
         return (f"largest relative energy error <= {self.energy:g} and position error <= {self.position:g} "
-                "of each body's distance from particle 0")
+                "of each body's distance from particle 0 (a moon's from its planet)")
 
 
 DEFAULT = Tolerance()
 
 
-def relative_position_error(positions: Sequence[Vector], reference: Sequence[Vector]) -> float:
+def relative_position_error(positions: Sequence[Vector], reference: Sequence[Vector],
+                            primaries: Optional[Mapping[int, int]] = None) -> float:
     """Largest error of a body's position relative to body 0, over its reference distance from body 0.
 
-    With one body, its error over its reference distance from the origin."""
+    primaries: {body: the body it orbits} for bodies measured about another
+    than body 0 (a moon about its planet: 1% of its distance from the Sun
+    would let it stand on the wrong side of the planet). With one body, its
+    error over its reference distance from the origin."""
     if len(positions) != len(reference):
         raise ValueError(f"positions: {len(positions)} bodies against {len(reference)} in the reference")
     if len(positions) == 1:
         return _ratio(math.dist(positions[0], reference[0]), math.hypot(*reference[0]))
+    primaries = primaries or {}
     worst = 0.0
-    for p, q in zip(positions[1:], reference[1:]):
-        d = [p[k] - positions[0][k] for k in range(3)]
-        r = [q[k] - reference[0][k] for k in range(3)]
+    for i in range(1, len(positions)):
+        c = primaries.get(i, 0)
+        if not (0 <= c < len(positions) and c != i):
+            raise ValueError(f"primaries: body {i}'s primary {c} is not another of the {len(positions)} bodies")
+        d = [positions[i][k] - positions[c][k] for k in range(3)]
+        r = [reference[i][k] - reference[c][k] for k in range(3)]
         worst = max(worst, _ratio(math.dist(d, r), math.hypot(*r)))
     return worst
 

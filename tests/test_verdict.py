@@ -40,6 +40,18 @@ def test_relative_position_error_is_per_body_about_body_0():
         verdict.relative_position_error([(0, 0, 0)], reference)
 
 
+def test_a_moon_is_measured_about_its_planet():
+    # Sun, planet at 1 AU, moon 0.0026 AU beyond it; the moon on the far side of its planet.
+    reference = [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (1.0026, 0.0, 0.0)]
+    flipped = [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.9974, 0.0, 0.0)]
+    assert verdict.relative_position_error(flipped, reference) == pytest.approx(0.0052 / 1.0026)  # under 1%
+    assert verdict.relative_position_error(flipped, reference, {2: 1}) == pytest.approx(2.0)
+    assert verdict.judge(1e-9, verdict.relative_position_error(flipped, reference, {2: 1}))[0] == verdict.INACCURATE
+    for bad in ({2: 2}, {2: 3}, {2: -1}):
+        with pytest.raises(ValueError, match="primaries: body 2's primary"):
+            verdict.relative_position_error(flipped, reference, bad)
+
+
 def test_stability_statuses_map_to_verdicts():
     case = stability.cases()["kepler-e0.99"]
     base = {"energy_error_max": 1e-7, "relative_position_error": 1e-6, "finite": True, "fraction": 0.25}
