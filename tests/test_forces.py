@@ -115,3 +115,53 @@ def test_velocity_dependent_force_keeps_the_order(s):
     # 6.00 between h = 0.1 and 0.05 (errors 2.6e-4, 4.9e-9, 8.0e-14).
     slope = math.log2(damped_oscillator_error(s, 0.1) / damped_oscillator_error(s, 0.05))
     assert slope == pytest.approx(2 * s - 2, abs=0.1)
+
+
+def _moon_of_the_earth():
+    sim = rebound.Simulation()
+    sim.G = 4 * math.pi ** 2
+    sim.add(m=1.0)
+    sim.add(m=3.0e-6, a=1.0, e=0.0167)
+    sim.add(primary=sim.particles[1], m=3.7e-8, a=0.00257, e=0.0549, inc=0.09)
+    sim.move_to_com()
+    return sim, 10.0
+
+
+def _flyby():
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=0.1)
+    sim.add(m=0.5, x=-30.0, y=1.5, vx=0.4)
+    sim.move_to_com()
+    return sim, 150.0
+
+
+def _binary_with_a_planet():
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=0.3, a=0.2, e=0.5)
+    sim.add(m=1e-4, a=1.0, e=0.05, inc=0.3)
+    sim.move_to_com()
+    return sim, 60.0
+
+
+@pytest.mark.parametrize("s", [4, 6, 8])
+@pytest.mark.parametrize("system", [_moon_of_the_earth, _flyby, _binary_with_a_planet])
+def test_the_velocity_dependent_flag_alone_changes_no_bit(system, s):
+    # The flag makes pfvi give the stage velocities to REBOUND's force calls,
+    # and takes the classical step's end from the IIIA-IIIB update as without
+    # it. Until 2026-11-29 the flag took the end from the stage solve's last
+    # iterate instead, whose rounding biased the energy: these runs ended
+    # 2e-13 ... 2e-10 apart, and the Moon about the Earth drifted to 7.5e-9 of
+    # its orbit in 10 yr at epsilon 1e-12 under REBOUNDx's gr, whatever c
+    # (6.4e-12 without the flag).
+    ends = []
+    for flag in (0, 1):
+        sim, t_end = system()
+        sim.integrator = "pfvi"
+        sim.integrator.epsilon = 1e-12
+        sim.integrator.stages = s
+        sim.force_is_velocity_dependent = flag
+        sim.integrate(t_end)
+        ends.append((sim.t, sim.integrator.n_steps, [p.xyz + p.vxyz for p in sim.particles]))
+    assert ends[0] == ends[1]
