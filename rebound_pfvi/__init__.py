@@ -22,6 +22,7 @@ Simulationarchives below). The lists below are generated from the C core's
 own field list when the package is imported.
 """
 import ctypes as _ctypes
+import math as _math
 from typing import Any, Dict, Tuple
 
 from ._core import INTEGRATOR_NAME, lib as _lib
@@ -217,6 +218,14 @@ def _refuse_integers_that_wrap():
 _refuse_integers_that_wrap()
 
 
+def _is_nan(value) -> bool:
+    """A NaN of any kind that converts to a float (Python's, numpy's scalars, a 0-d array)."""
+    try:
+        return _math.isnan(value)
+    except (TypeError, ValueError):
+        return False
+
+
 def _tell_the_requested_time():
     """sim.integrate(tmax) for "pfvi" tells the core tmax while REBOUND's
     integrate runs. REBOUND decides whether a step finishes on tmax by
@@ -238,7 +247,7 @@ def _tell_the_requested_time():
     def integrate(self, tmax, exact_finish_time=1):
         if self.integrator.name != name:
             return generic(self, tmax, exact_finish_time)
-        if isinstance(tmax, float) and tmax != tmax:
+        if _is_nan(tmax):
             # (REBOUND would step for ever: no t reaches NaN, and none passes it)
             raise ValueError("sim.integrate(tmax): tmax is NaN; nothing integrated")
         try:

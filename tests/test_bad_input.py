@@ -432,7 +432,7 @@ def test_integrate_to_nan_is_refused_not_stepped_for_ever():
         sim = rebound.Simulation(); sim.add(m=1); sim.add(m=1e-3, a=1, e=0.5); sim.integrator = "pfvi"
         sim.integrate(0.5)
         before = (sim.t, [p.xyz + p.vxyz for p in sim.particles])
-        for tmax in (math.nan, numpy.float64("nan")):
+        for tmax in (math.nan, numpy.float64("nan"), numpy.float32("nan"), numpy.array(numpy.nan)):
             try:
                 sim.integrate(tmax)
             except ValueError as error:
