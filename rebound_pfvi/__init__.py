@@ -218,7 +218,7 @@ def _refuse_integers_that_wrap():
 _refuse_integers_that_wrap()
 
 
-def _is_nan(value) -> bool:
+def _is_nan(value: Any) -> bool:
     """A NaN of any kind that converts to a float (Python's, numpy's scalars, a 0-d array)."""
     try:
         return _math.isnan(value)
