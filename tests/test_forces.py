@@ -165,3 +165,38 @@ def test_the_velocity_dependent_flag_alone_changes_no_bit(system, s):
         sim.integrate(t_end)
         ends.append((sim.t, sim.integrator.n_steps, [p.xyz + p.vxyz for p in sim.particles]))
     assert ends[0] == ends[1]
+
+
+@pytest.mark.parametrize("epsilon", [1e-11, 1e-12])
+def test_a_drag_is_not_taken_at_a_false_round_off_floor(epsilon):
+    # With a velocity-dependent force the stage velocities follow the
+    # positions a round late, so the round after the Newton correction
+    # settled can stall once above the confirming bound. Until 2026-11-29 the
+    # stop rule took any stall below 1e-12 as the round-off floor: this drag
+    # ended 1.4e-10 (epsilon 1e-11) and 5.7e-11 (1e-12) from IAS15, against
+    # 1.9e-14 at epsilon 3e-11. The floor must now hold for two rounds.
+    K = 1e-3
+
+    def run(integrator, eps):
+        sim = rebound.Simulation()
+        sim.add(m=1.0)
+        sim.add(m=1e-3, a=1.0, e=0.0, f=0.5)
+
+        def drag(simp):
+            p = simp.contents.particles[1]
+            p.ax -= K * p.vx
+            p.ay -= K * p.vy
+            p.az -= K * p.vz
+
+        sim.additional_forces = drag
+        sim.force_is_velocity_dependent = 1
+        sim.integrator = integrator
+        sim.integrator.epsilon = eps
+        if integrator == "pfvi":
+            sim.integrator.stages = 8
+        sim.integrate(20 * math.pi)
+        return [c for p in sim.particles for c in p.xyz]
+
+    reference = run("ias15", 1e-12)
+    error = max(abs(a - b) for a, b in zip(run("pfvi", epsilon), reference))
+    assert error < 3e-13

@@ -1558,14 +1558,14 @@ struct pfvi_solve_ops {
 // (a retry: kept), or the last step's stages (extrapolated), or neither.
 enum { PFVI_PREDICTED_NONE = 0, PFVI_PREDICTED_RETRY = 1, PFVI_PREDICTED_EXTRAPOLATED = 2 };
 enum pfvi_solve_next { PFVI_SOLVE_ITERATE = 0, PFVI_SOLVE_FINAL = 1, PFVI_SOLVE_CONVERGED = 2,
-    PFVI_SOLVE_DIVERGING = 3, PFVI_SOLVE_FAILED = -1 };
+    PFVI_SOLVE_DIVERGING = 3, PFVI_SOLVE_STALLED = 4, PFVI_SOLVE_FAILED = -1 };
 // The largest change of one particle's unknowns y -> yn, relative to the
 // larger of |q0|, its step's increment y[increment] and scale; NaN kept.
 PFVI_INTERNAL double pfvi_solve_change(const double (*y)[3], const double (*yn)[3], const double* q0,
         int increment, int s, double scale);
 // The stop rule (PFVI_SOLVE_RESOLUTION): after a correction of size change
-// following one of size previous.
-PFVI_INTERNAL enum pfvi_solve_next pfvi_solve_verdict(double change, double previous, int last_round);
+// following one of size previous (stalled: the last verdict was STALLED).
+PFVI_INTERNAL enum pfvi_solve_next pfvi_solve_verdict(double change, double previous, int stalled, int last_round);
 // The next iterate becomes the current one (real and variational particles).
 PFVI_INTERNAL void pfvi_solve_swap(struct pfvi_state* st);
 // The Newton units at the stage points solve_x (partners: st->partners);
