@@ -8,6 +8,7 @@ import ctypes
 import faulthandler
 import math
 import struct
+import warnings
 
 import pytest
 import rebound
@@ -201,16 +202,24 @@ def test_a_refused_step_leaves_every_particle_still_there_unchanged(stages, epsi
 
     sim.additional_forces = force
     size = ctypes.sizeof(rebound.Particle)
-    for _ in range(80):
-        t0, data, N = sim.t, snapshot(sim)[1], sim.N
-        try:
-            sim.steps(1)
-        except RuntimeError as error:
-            assert str(error).startswith("pfvi: ")
-            assert sim.t == t0
-            records = [data[k * size:(k + 1) * size] for k in range(N)]
-            if fault == "remove":
-                records = records[:index] + records[index + 1:]
-            assert snapshot(sim)[1][:len(records) * size] == b"".join(records)
-            return
-    assert calls["n"] < fault_at  # the fault was never reached: nothing to refuse
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for _ in range(80):
+            t0, data, N = sim.t, snapshot(sim)[1], sim.N
+            try:
+                sim.steps(1)
+            except RuntimeError as error:
+                assert str(error).startswith("pfvi: ")
+                assert sim.t == t0
+                records = [data[k * size:(k + 1) * size] for k in range(N)]
+                if fault == "remove":
+                    records = records[:index] + records[index + 1:]
+                assert snapshot(sim)[1][:len(records) * size] == b"".join(records)
+                return
+    # The fault was never reached (nothing to refuse), or, since 2026-11-29,
+    # a force that was not finite at a stage point of an adaptive s-point
+    # trial: that trial was retaken shorter, and REBOUND was told.
+    halved = [w for w in caught if "not finite at a trial step's stage point" in str(w.message)]
+    if calls["n"] >= fault_at:
+        assert halved and fault in ("nan", "inf") and epsilon > 0 and stages > 2
+        assert all(math.isfinite(c) for p in sim.particles for c in p.xyz + p.vxyz)

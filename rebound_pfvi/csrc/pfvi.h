@@ -1092,6 +1092,11 @@ struct pfvi_state {
     double density_dlog;
     struct pfvi_trial_record trial;
     struct pfvi_fault fault;
+    // The last trial's stage forces were not finite (kind FORCE or
+    // OVERFLOW; NONE otherwise): the stage solve took that as its trial's
+    // failure, and the controls halve the step. Named (pfvi_give_up) if no
+    // shorter step is left.
+    struct pfvi_fault stage_fault;
     // A fixed step's stages implied an error above PFVI_FIXED_WARN and
     // REBOUND was told (once per simulation; not saved).
     int fixed_warned;
@@ -1108,6 +1113,9 @@ struct pfvi_state {
     int kappa_warned;
     // A step was kept unresolved and REBOUND was told (once per simulation; not saved).
     int unresolved_warned;
+    // A stage force that was not finite halved a step (said once per
+    // simulation; not saved).
+    int stage_fault_warned;
     // Without pairs: consecutive steps retaken to a step that no longer
     // reached what made the first trial coarse (pfvi_control.c,
     // control_unpaired; saved).
@@ -1477,6 +1485,9 @@ PFVI_INTERNAL void pfvi_step_model_keep(const struct reb_simulation* r, struct p
 PFVI_INTERNAL void pfvi_step_model_apply_pending(struct reb_simulation* r, struct pfvi_state* st);
 // Puts every particle (all fields) and t back to the start of the step.
 PFVI_INTERNAL void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0);
+// A control's refusal when no shorter step is left: fault, or the last
+// trial's stage forces that were not finite (st->stage_fault), the cause.
+PFVI_INTERNAL void pfvi_give_up(struct pfvi_state* st, struct pfvi_fault fault);
 // Evaluates forces through REBOUND; 0 (rolled back, fault recorded) if they
 // are not finite or a callback changed N.
 PFVI_INTERNAL int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0);

@@ -98,8 +98,8 @@ static double control_seed(struct reb_simulation* r, struct pfvi_state* st, size
         rejections++;
         const double h_next = h*shrink;
         if (rejections >= PFVI_CONTROL_MAX_REJECTIONS || t0 + h_next == t0){
-            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_REJECTED, .t0 = t0, .h = h,
-                .value = (trial == PFVI_TRIAL_OK) ? view.error : NAN};
+            pfvi_give_up(st, (struct pfvi_fault){.kind = PFVI_FAULT_REJECTED, .t0 = t0, .h = h,
+                .value = (trial == PFVI_TRIAL_OK) ? view.error : NAN});
             return 0.;
         }
         h = h_next;
@@ -246,8 +246,8 @@ static double control_reversible(struct reb_simulation* r, struct pfvi_state* st
         }
     }
     if (!solved){
-        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_UNSOLVED, .t0 = t0, .rounds = (uint64_t)trials,
-            .h = sign*h, .value = F};
+        pfvi_give_up(st, (struct pfvi_fault){.kind = PFVI_FAULT_UNSOLVED, .t0 = t0, .rounds = (uint64_t)trials,
+            .h = sign*h, .value = F});
         return 0.;
     }
     h *= sign;
@@ -911,8 +911,8 @@ static double control_unpaired(struct reb_simulation* r, struct pfvi_state* st, 
         st->statistics.n_asymmetric++;
         h = h_next;
         if (t0 + sign*h == t0){
-            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_NOT_CONVERGED, .n = (size_t)s,
-                .value = st->trial.change, .rounds = st->trial.rounds, .t0 = t0};
+            pfvi_give_up(st, (struct pfvi_fault){.kind = PFVI_FAULT_NOT_CONVERGED, .n = (size_t)s,
+                .value = st->trial.change, .rounds = st->trial.rounds, .t0 = t0});
             return 0.;
         }
     }
@@ -1244,9 +1244,9 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
         if (t0 + sign*h == t0){
             // (flag: the last trial's solve converged; the step was retaken
             // shorter for what its end showed, a closer approach)
-            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_NOT_CONVERGED, .n = (size_t)o->stages,
+            pfvi_give_up(st, (struct pfvi_fault){.kind = PFVI_FAULT_NOT_CONVERGED, .n = (size_t)o->stages,
                 .value = st->trial.change, .rounds = st->trial.rounds, .t0 = t0,
-                .flag = (trial != PFVI_TRIAL_NOT_CONVERGED)};
+                .flag = (trial != PFVI_TRIAL_NOT_CONVERGED)});
             return 0.;
         }
     }

@@ -44,6 +44,7 @@
  */
 #include <float.h>
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 #include "pfvi.h"
 
@@ -1006,6 +1007,37 @@ static void solve_take_end(struct pfvi_state* st, size_t N, double h){
     }
 }
 
+// A force evaluation of the solve failed (rolled back). A force that is not
+// finite at an iterate's stage point, or a stage point that overflowed, is
+// this trial's failure, not the run's: the first iterate can lie far off
+// the step's orbit (REBOUNDx's gr, whose own iteration diverges as its A
+// nears 1, gave inf there at e = 0.84 with c = 30 where the halved step
+// went on and ended 2.6e-8 from IAS15 at epsilon 1e-12). The step is then
+// halved, as for a solve that did not converge: a shorter step's stages lie
+// nearer its start, whose force was finite. Any other failure refuses. Said
+// once per simulation, so that a force that is not finite by mistake (a
+// callback's NaN) is not passed over in silence.
+static enum pfvi_trial solve_forces_failed(struct reb_simulation* r, struct pfvi_state* st){
+    // (Fixed steps, epsilon = 0, have no shorter step to take.)
+    if ((st->fault.kind != PFVI_FAULT_FORCE && st->fault.kind != PFVI_FAULT_OVERFLOW) || !(st->options.epsilon > 0.)){
+        return PFVI_TRIAL_ERROR;
+    }
+    st->stage_fault = st->fault;
+    st->fault.kind = PFVI_FAULT_NONE;
+    if (!st->stage_fault_warned){
+        st->stage_fault_warned = 1;
+        char msg[REB_STRING_SIZE_MAX];
+        // (REBOUND keeps 254 characters of a message.)
+        const int force = (st->stage_fault.kind == PFVI_FAULT_FORCE);
+        snprintf(msg, sizeof(msg), "pfvi: the %s of particle %zu was not finite at a trial step's stage point "
+                "(t = %.17g); the step was retaken shorter (n_solve_halved). Said once per simulation.",
+                force ? "force" : "position or velocity", st->stage_fault.particle,
+                force ? st->stage_fault.t : st->stage_fault.t0);
+        reb_simulation_warning(r, msg);
+    }
+    return PFVI_TRIAL_NOT_CONVERGED;
+}
+
 enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
         const struct pfvi_solve_ops* ops, int predicted){
     const int s = st->rule.s;
@@ -1044,7 +1076,7 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
         // (an end free of its step is evaluated once, after: solve_take_end)
         const int k_last = end_free ? s - 2 : s - 1;
         if (!ops->forces(r, st, N, t0, h, 1, k_last)){
-            return PFVI_TRIAL_ERROR;
+            return solve_forces_failed(r, st);
         }
         rounds++;
         end_evaluated = (k_last == s - 1);
@@ -1113,7 +1145,7 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
         solve_take_end(st, N, h);
     }
     if (converged && !end_evaluated && !ops->forces(r, st, N, t0, h, s - 1, s - 1)){
-        return PFVI_TRIAL_ERROR;
+        return solve_forces_failed(r, st);
     }
     return converged ? PFVI_TRIAL_OK : PFVI_TRIAL_NOT_CONVERGED;
 }

@@ -53,6 +53,7 @@ enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* st,
     st->trial.megno_dY = 0.;
     st->trial.megno_Y_integral = 0.;
     st->trial.solve_recovered = 0;
+    st->stage_fault.kind = PFVI_FAULT_NONE;
     if (!scheme->prepare(st, h)){
         pfvi_roll_back(r, st, N, t0);
         return PFVI_TRIAL_ERROR;
@@ -105,6 +106,10 @@ enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* st,
     st->trial.omega_min = omega_min;
     st->trial.omega_max = omega_max;
     return PFVI_TRIAL_OK;
+}
+
+void pfvi_give_up(struct pfvi_state* st, struct pfvi_fault fault){
+    st->fault = (st->stage_fault.kind != PFVI_FAULT_NONE) ? st->stage_fault : fault;
 }
 
 void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* st, size_t N, double h){
