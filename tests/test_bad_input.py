@@ -448,3 +448,31 @@ def test_integrate_to_nan_is_refused_not_stepped_for_ever():
     done = subprocess.run([sys.executable, "-P", "-c", code], capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["ok", "1.0"]
+
+
+@pytest.mark.filterwarnings("ignore:.*not finite at a trial step's stage point:RuntimeWarning")
+def test_a_force_not_finite_ahead_is_named_where_the_halving_stops():
+    # A force that is NaN beyond x = -1.2, which the e = 0.5 orbit reaches:
+    # the adaptive steps are halved up to where it starts (t = 1.99, where
+    # the build before refused at t = 1.64, the start of the step whose
+    # stage met it), and the refusal names the force, not "the step dt =
+    # 1.16e-16 does not change t" (a hostile trial of 2026-11-29).
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=0.5)
+    sim.move_to_com()
+
+    def force(simp):
+        p = simp.contents.particles[1]
+        if p.x < -1.2:
+            p.ax = math.nan
+
+    sim.additional_forces = force
+    sim.integrator = "pfvi"
+    with pytest.raises(RuntimeError, match=r"force on particle 1 is not finite at t = 1\.99"):
+        sim.integrate(10.0)
+    assert sim.particles[1].x >= -1.2 and 1.99 < sim.t < 1.991
+    # (asked again, it is refused again there: the state stays finite)
+    with pytest.raises(RuntimeError, match=r"force on particle 1 is not finite at t = 1\.99"):
+        sim.integrate(10.0)
+    assert 1.99 < sim.t < 1.991 and all(math.isfinite(c) for p in sim.particles for c in p.xyz + p.vxyz)

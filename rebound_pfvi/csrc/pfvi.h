@@ -1092,10 +1092,11 @@ struct pfvi_state {
     double density_dlog;
     struct pfvi_trial_record trial;
     struct pfvi_fault fault;
-    // The last trial's stage forces were not finite (kind FORCE or
-    // OVERFLOW; NONE otherwise): the stage solve took that as its trial's
-    // failure, and the controls halve the step. Named (pfvi_give_up) if no
-    // shorter step is left.
+    // A trial of this step met stage forces that were not finite (kind
+    // FORCE or OVERFLOW; NONE otherwise): the stage solve took that as its
+    // trial's failure, and the controls halve the step. Named (pfvi_give_up,
+    // and where a step below t's rounding is all that is left) if no shorter
+    // step helps.
     struct pfvi_fault stage_fault;
     // A fixed step's stages implied an error above PFVI_FIXED_WARN and
     // REBOUND was told (once per simulation; not saved).
@@ -1485,8 +1486,8 @@ PFVI_INTERNAL void pfvi_step_model_keep(const struct reb_simulation* r, struct p
 PFVI_INTERNAL void pfvi_step_model_apply_pending(struct reb_simulation* r, struct pfvi_state* st);
 // Puts every particle (all fields) and t back to the start of the step.
 PFVI_INTERNAL void pfvi_roll_back(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0);
-// A control's refusal when no shorter step is left: fault, or the last
-// trial's stage forces that were not finite (st->stage_fault), the cause.
+// A control's refusal when no shorter step is left: fault, or the stage
+// forces of this step's trials that were not finite (st->stage_fault), the cause.
 PFVI_INTERNAL void pfvi_give_up(struct pfvi_state* st, struct pfvi_fault fault);
 // Evaluates forces through REBOUND; 0 (rolled back, fault recorded) if they
 // are not finite or a callback changed N.

@@ -1411,6 +1411,14 @@ static enum pfvi_glue glue_step(struct reb_simulation* r, struct pfvi_state* st,
                     nextafter(fabs(t0), INFINITY) - fabs(t0));
             return PFVI_GLUE_DONE;
         }
+        if (st->stage_fault.kind != PFVI_FAULT_NONE){
+            // Halved down to t's rounding from a force that was not finite
+            // ahead: that force is the cause (a hostile trial: NaN beyond
+            // x = -1.2 read "the step dt = 1.16e-16 does not change t").
+            st->fault = st->stage_fault;
+            pfvi_report(r, st);
+            return PFVI_GLUE_DONE;
+        }
         pfvi_error(r, "pfvi: the step dt = %.3g does not change t = %.17g (it is below the rounding of t); "
                 "step not taken, state restored. Use a larger dt, or start t nearer 0.", h, t0);
         return PFVI_GLUE_DONE;
@@ -1507,6 +1515,7 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
         return;
     }
     st->fault.kind = PFVI_FAULT_NONE;  // a refusing layer writes the whole record
+    st->stage_fault.kind = PFVI_FAULT_NONE;
     st->retry_valid = 0;  // a step starts from the last step's stages, never from a refused one's
     if (!pfvi_scratch(st, N)){
         pfvi_report(r, st);

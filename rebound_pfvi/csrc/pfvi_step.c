@@ -53,7 +53,6 @@ enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* st,
     st->trial.megno_dY = 0.;
     st->trial.megno_Y_integral = 0.;
     st->trial.solve_recovered = 0;
-    st->stage_fault.kind = PFVI_FAULT_NONE;
     if (!scheme->prepare(st, h)){
         pfvi_roll_back(r, st, N, t0);
         return PFVI_TRIAL_ERROR;
