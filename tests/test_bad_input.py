@@ -476,3 +476,29 @@ def test_a_force_not_finite_ahead_is_named_where_the_halving_stops():
     with pytest.raises(RuntimeError, match=r"force on particle 1 is not finite at t = 1\.99"):
         sim.integrate(10.0)
     assert 1.99 < sim.t < 1.991 and all(math.isfinite(c) for p in sim.particles for c in p.xyz + p.vxyz)
+
+
+@pytest.mark.filterwarnings("ignore:.*not finite at a trial step's stage point:RuntimeWarning")
+@pytest.mark.parametrize("step_control", ["symmetric", "reversible", "seed"])
+def test_a_trial_halved_for_a_force_not_finite_is_counted(step_control):
+    # A force that is NaN once, at one stage point: the trial is retaken
+    # shorter and counted in n_solve_halved under every step control (the
+    # symmetric control judged the NaN stages unresolved and left it out of
+    # the count; a hostile trial of 2026-11-29).
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=0.5)
+    sim.move_to_com()
+    calls = {"n": 0}
+
+    def force(simp):
+        calls["n"] += 1
+        if calls["n"] == 200:
+            simp.contents.particles[1].ax = math.nan
+
+    sim.additional_forces = force
+    sim.integrator = "pfvi"
+    sim.integrator.step_control = step_control
+    sim.integrate(10.0)
+    assert calls["n"] > 200 and sim.integrator.n_solve_halved >= 1
+    assert all(math.isfinite(c) for p in sim.particles for c in p.xyz + p.vxyz)

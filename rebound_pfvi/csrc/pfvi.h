@@ -883,6 +883,7 @@ struct pfvi_trial_record {
     double omega_min;
     double omega_max;
     int solve_recovered;           // the stage solve refreshed or dropped its Jacobians
+    int stage_failed;              // a force at a stage point was not finite (st->stage_fault)
 };
 
 struct pfvi_compensation {

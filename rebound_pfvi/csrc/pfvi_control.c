@@ -1232,8 +1232,9 @@ static double control_symmetric(struct reb_simulation* r, struct pfvi_state* st,
             // The solve's own failure, unless its last stages show forces the
             // step does not resolve (a time scale the density missed: the
             // resolution check would retake it had the solve converged).
+            // (Stages with a force that is not finite: halved for that.)
             int resolved = 1;
-            if (pfvi_field_of(r, st, &field)){
+            if (!st->trial.stage_failed && pfvi_field_of(r, st, &field)){
                 const double u_last = symmetric_resolution(r, st, N, sign*h, &field, constants->above);
                 resolved = !(pow(u_last/u_target, 2.*o->stages - 2.) > PFVI_RESOLUTION_MAX);
             }

@@ -53,6 +53,7 @@ enum pfvi_trial pfvi_trial_step(struct reb_simulation* r, struct pfvi_state* st,
     st->trial.megno_dY = 0.;
     st->trial.megno_Y_integral = 0.;
     st->trial.solve_recovered = 0;
+    st->trial.stage_failed = 0;
     if (!scheme->prepare(st, h)){
         pfvi_roll_back(r, st, N, t0);
         return PFVI_TRIAL_ERROR;
