@@ -1467,11 +1467,11 @@ PFVI_INTERNAL void pfvi_replay_clear(struct pfvi_state* st);
 // The field the time scales see (struct pfvi_field): REBOUND's G (0 with
 // gravity off), softening, N_active and its ghost boxes at r->t (in st's
 // scratch); 0 (fault recorded) if memory ran out.
-PFVI_INTERNAL int pfvi_field_of(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_field* f);
+PFVI_INTERNAL int pfvi_field_of(const struct reb_simulation* r, struct pfvi_state* st, struct pfvi_field* f);
 // The number of ghost boxes REBOUND sums over, and their shifts at r->t
 // into images (room for that many), in the order of pfvi_field.
 PFVI_INTERNAL size_t pfvi_ghost_box_count(const struct reb_simulation* r);
-PFVI_INTERNAL void pfvi_ghost_boxes(struct reb_simulation* r, struct reb_vec6d* images);
+PFVI_INTERNAL void pfvi_ghost_boxes(const struct reb_simulation* r, struct reb_vec6d* images);
 // Discards stored state that no step of pfvi's could have left (from an
 // archive or set by hand: NaN, infinite, a zero step, a scale below 1, a
 // carried part above the doubles' precision): the predictor, the symmetric
@@ -1505,6 +1505,14 @@ struct pfvi_error_mark {
 };
 PFVI_INTERNAL struct pfvi_error_mark pfvi_rebound_errors(const struct reb_simulation* r);
 PFVI_INTERNAL int pfvi_rebound_error_since(const struct reb_simulation* r, struct pfvi_error_mark before);
+// An error (sim.integrate() raises it in Python) or a warning through
+// REBOUND, printf-style. REBOUND keeps at most REB_STRING_SIZE_MAX - 2
+// characters of a message and cuts the rest anywhere (a hostile trial: "...
+// smooth it, or "): a message that long ends at its last whole clause that
+// fits. (The messages are written to fit with the widest numbers; this is
+// the guard.)
+PFVI_INTERNAL void pfvi_error(struct reb_simulation* r, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
+PFVI_INTERNAL void pfvi_warning(struct reb_simulation* r, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
 // pfvi_gravity.c: whether REBOUND's routine would compute only its basic
 // gravity (no additional forces, variations, ghost boxes or ignored terms),
 // which pfvi_gravity_stages then computes at stages k0 .. k1 of positions x

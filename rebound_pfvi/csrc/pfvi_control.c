@@ -726,12 +726,9 @@ static void count_unresolved(struct reb_simulation* r, struct pfvi_state* st, do
         return;
     }
     st->unresolved_warned = 1;
-    char msg[REB_STRING_SIZE_MAX];
-    // (REBOUND keeps 254 characters of a message.)
-    snprintf(msg, sizeof(msg), "pfvi: step at t = %.6g kept unresolved after " PFVI_STR(PFVI_RESOLUTION_RETRIES)
+    pfvi_warning(r, "pfvi: step at t = %.6g kept unresolved after " PFVI_STR(PFVI_RESOLUTION_RETRIES)
             " retakes (n_unresolved): epsilon not met there. Forces that jump within a step, or depend on "
             "velocities without sim.force_is_velocity_dependent = 1, do this. Said once.", t0);
-    reb_simulation_warning(r, msg);
 }
 
 // A kappa below PFVI_KAPPA_WARN: said once per simulation, with the steps an
@@ -741,12 +738,9 @@ static void warn_small_kappa(struct reb_simulation* r, struct pfvi_state* st, do
     struct pfvi_options most = st->options;
     most.stages = PFVI_STAGES_MAX;
     const double turn = 2.*M_PI;
-    char msg[REB_STRING_SIZE_MAX];
-    // (REBOUND keeps 254 characters of a message.)
-    snprintf(msg, sizeof(msg), "pfvi: epsilon %.3g at stages = %d takes steps of %.2g radians of the fastest orbit: "
+    pfvi_warning(r, "pfvi: epsilon %.3g at stages = %d takes steps of %.2g radians of the fastest orbit: "
             "about %.2g steps an orbit, more where it is eccentric (stages = %d: about %.2g). Said once per simulation.",
             st->options.epsilon, st->options.stages, kappa, turn/kappa, PFVI_STAGES_MAX, turn/symmetric_kappa(&most));
-    reb_simulation_warning(r, msg);
 }
 
 // The shortest |v|/|a| at the step's start over the bodies that move and

@@ -545,30 +545,6 @@ static void pfvi_free(void* state){
     }
 }
 
-// Reports an error through REBOUND; sim.integrate() raises it in Python.
-// REBOUND keeps at most REB_STRING_SIZE_MAX - 2 characters of a message and
-// cuts the rest anywhere (a hostile trial: "... smooth it, or "): a message
-// that long ends at its last whole clause that fits. (The messages are
-// written to fit with the widest numbers; this is the guard.)
-__attribute__((format(printf, 2, 3)))
-static void pfvi_error(struct reb_simulation* r, const char* fmt, ...){
-    char msg[4*REB_STRING_SIZE_MAX];
-    va_list args;
-    va_start(args, fmt);
-    const int n = vsnprintf(msg, sizeof(msg), fmt, args);
-    va_end(args);
-    const size_t kept = REB_STRING_SIZE_MAX - 2;
-    if (n > 0 && (size_t)n > kept){
-        size_t end = 0;
-        for (size_t i=0; i + 1 < kept; i++){
-            end = ((msg[i] == '.' || msg[i] == ';' || msg[i] == ':') && msg[i+1] == ' ') ? i : end;
-        }
-        msg[end] = '.';
-        msg[end + 1] = '\0';
-    }
-    reb_simulation_error(r, msg);
-}
-
 // The message for the fault a lower layer recorded.
 static void pfvi_report(struct reb_simulation* r, const struct pfvi_state* st){
     const struct pfvi_fault* const f = &st->fault;
@@ -1027,26 +1003,23 @@ static double pfvi_fixed_step(struct reb_simulation* r, struct pfvi_state* st, s
     const int unpaired = check.saturated && !(check.kappa > 0.);
     if ((check.error > PFVI_FIXED_WARN || by_density || unpaired) && !st->fixed_warned){
         st->fixed_warned = 1;
-        char msg[REB_STRING_SIZE_MAX];
         // The stages' estimate saturates (pfvi_fixed_step_check): a lower
         // bound, said so, with the span the density measured.
-        // (REBOUND keeps 254 characters of a message.)
         if (check.error > PFVI_FIXED_WARN){
-            snprintf(msg, sizeof(msg), "pfvi: the fixed step dt = %.6g from t = %.10g spans %.2g radians of the "
+            pfvi_warning(r, "pfvi: the fixed step dt = %.6g from t = %.10g spans %.2g radians of the "
                     "fastest orbit; particle %zu's stages imply a position error of at least %.2g per orbit (above "
                     PFVI_STR(PFVI_FIXED_WARN) "). Use a shorter dt or epsilon > 0. Said once per simulation.",
                     h, t0, check.kappa, check.particle, check.error);
         }else if (by_density){
-            snprintf(msg, sizeof(msg), "pfvi: the fixed step dt = %.6g from t = %.10g spans %.2g radians of the "
+            pfvi_warning(r, "pfvi: the fixed step dt = %.6g from t = %.10g spans %.2g radians of the "
                     "fastest orbit, where steps err by more than " PFVI_STR(PFVI_FIXED_WARN) " per orbit (above "
                     "%.2g). Use a shorter dt or epsilon > 0. Said once per simulation.", h, t0, check.kappa, kappa_warn);
         }else{
-            snprintf(msg, sizeof(msg), "pfvi: the fixed step dt = %.6g from t = %.10g is not resolved: particle %zu's "
+            pfvi_warning(r, "pfvi: the fixed step dt = %.6g from t = %.10g is not resolved: particle %zu's "
                     "forces turn by %.2g radians in it, where its stages' estimate saturates, and no pair sets a "
                     "time scale. Use a shorter dt or epsilon > 0. Said once per simulation.", h, t0, check.particle,
                     check.u);
         }
-        reb_simulation_warning(r, msg);
     }
     pfvi_commit_step(r, st, N, h);
     return h;
@@ -1398,8 +1371,8 @@ static enum pfvi_glue glue_step(struct reb_simulation* r, struct pfvi_state* st,
     if (r->t == t0){
         // t + h rounds to t: REBOUND would call this step for ever.
         pfvi_roll_back(r, st, N, t0);
-        size_t pi, pj;
-        double separation, omega;
+        size_t pi = 0, pj = 0;   // (set where the pair is found, the only case read)
+        double separation = 0., omega = 0.;
         if (st->options.epsilon > 0. && pfvi_tightest_pair(r, N, &pi, &pj, &separation, &omega)
                 && omega*fabs(t0)*DBL_EPSILON > PFVI_TIGHT_PAIR_ROUNDING){
             // The adaptive step followed the tightest pair: not dt's fault.

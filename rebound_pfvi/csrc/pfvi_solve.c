@@ -1027,15 +1027,12 @@ static enum pfvi_trial solve_forces_failed(struct reb_simulation* r, struct pfvi
     st->trial.stage_failed = 1;
     if (!st->stage_fault_warned){
         st->stage_fault_warned = 1;
-        char msg[REB_STRING_SIZE_MAX];
-        // (REBOUND keeps 254 characters of a message.)
         const int force = (st->stage_fault.kind == PFVI_FAULT_FORCE);
-        snprintf(msg, sizeof(msg), "pfvi: the %s of particle %zu was not finite at a trial step's stage point "
+        pfvi_warning(r, "pfvi: the %s of particle %zu was not finite at a trial step's stage point "
                 "(t = %.17g); retaken shorter (n_solve_halved), which can step across a thin region where it "
                 "is not. Said once per simulation.",
                 force ? "force" : "position or velocity", st->stage_fault.particle,
                 force ? st->stage_fault.t : st->stage_fault.t0);
-        reb_simulation_warning(r, msg);
     }
     return PFVI_TRIAL_NOT_CONVERGED;
 }

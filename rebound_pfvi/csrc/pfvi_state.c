@@ -8,7 +8,9 @@
  */
 #include <float.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include "pfvi.h"
@@ -443,7 +445,7 @@ size_t pfvi_ghost_box_count(const struct reb_simulation* r){
     return nx*ny*nz;
 }
 
-void pfvi_ghost_boxes(struct reb_simulation* r, struct reb_vec6d* images){
+void pfvi_ghost_boxes(const struct reb_simulation* r, struct reb_vec6d* images){
     if (pfvi_ghost_box_count(r) == 1){
         images[0] = (struct reb_vec6d){0., 0., 0., 0., 0., 0.};
         return;
@@ -454,13 +456,14 @@ void pfvi_ghost_boxes(struct reb_simulation* r, struct reb_vec6d* images){
     for (int i=-r->N_ghost_x; i<=r->N_ghost_x; i++){
         for (int j=-r->N_ghost_y; j<=r->N_ghost_y; j++){
             for (int k=-r->N_ghost_z; k<=r->N_ghost_z; k++){
-                images[g++] = reb_boundary_get_ghostbox(r, i, j, k);
+                // (REBOUND's routine reads r; its signature does not say so)
+                images[g++] = reb_boundary_get_ghostbox((struct reb_simulation*)r, i, j, k);
             }
         }
     }
 }
 
-int pfvi_field_of(struct reb_simulation* r, struct pfvi_state* st, struct pfvi_field* f){
+int pfvi_field_of(const struct reb_simulation* r, struct pfvi_state* st, struct pfvi_field* f){
     const size_t n = pfvi_ghost_box_count(r);
     if (n > st->images_allocated){
         struct reb_vec6d* const grown = realloc(st->images, n*sizeof(*grown));
@@ -732,6 +735,39 @@ struct pfvi_error_mark pfvi_rebound_errors(const struct reb_simulation* r){
 int pfvi_rebound_error_since(const struct reb_simulation* r, struct pfvi_error_mark before){
     const struct pfvi_error_mark now = pfvi_rebound_errors(r);
     return now.n > before.n || (now.newest != before.newest && now.newest != NULL && now.newest[0] == 'e');
+}
+
+static void message(struct reb_simulation* r, int error, const char* fmt, va_list args){
+    char msg[4*REB_STRING_SIZE_MAX];
+    const int n = vsnprintf(msg, sizeof(msg), fmt, args);
+    const size_t kept = REB_STRING_SIZE_MAX - 2;
+    if (n > 0 && (size_t)n > kept){
+        size_t end = 0;
+        for (size_t i=0; i + 1 < kept; i++){
+            end = ((msg[i] == '.' || msg[i] == ';' || msg[i] == ':') && msg[i+1] == ' ') ? i : end;
+        }
+        msg[end] = '.';
+        msg[end + 1] = '\0';
+    }
+    if (error){
+        reb_simulation_error(r, msg);
+    }else{
+        reb_simulation_warning(r, msg);
+    }
+}
+
+void pfvi_error(struct reb_simulation* r, const char* fmt, ...){
+    va_list args;
+    va_start(args, fmt);
+    message(r, 1, fmt, args);
+    va_end(args);
+}
+
+void pfvi_warning(struct reb_simulation* r, const char* fmt, ...){
+    va_list args;
+    va_start(args, fmt);
+    message(r, 0, fmt, args);
+    va_end(args);
 }
 
 int pfvi_forces_run_user_code(const struct reb_simulation* r){

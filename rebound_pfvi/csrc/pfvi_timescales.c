@@ -129,10 +129,10 @@ static inline __attribute__((always_inline)) void partner_search_lanes(const str
                     continue;
                 }
                 if (j_attracts && stiffness[l] > out[i].stiffness){
-                    out[i] = (struct pfvi_partner){j, 0, stiffness[l]};
+                    out[i] = (struct pfvi_partner){j, 0, stiffness[l], 0., 0.};
                 }
                 if (i_attracts && stiffness[l] > out[j].stiffness){
-                    out[j] = (struct pfvi_partner){i, 0, stiffness[l]};
+                    out[j] = (struct pfvi_partner){i, 0, stiffness[l], 0., 0.};
                 }
             }
         }
@@ -144,7 +144,7 @@ void pfvi_partner_search(const struct reb_particle* p, size_t N, const struct pf
         struct pfvi_partner* out){
     const size_t n_attracting = (f->N_active < N) ? f->N_active : N;
     for (size_t i=0; i<N; i++){
-        out[i] = (struct pfvi_partner){SIZE_MAX, 0, 0.};
+        out[i] = (struct pfvi_partner){SIZE_MAX, 0, 0., 0., 0.};
     }
     if (!(f->G > 0.)){
         return;
@@ -178,10 +178,10 @@ void pfvi_partner_search(const struct reb_particle* p, size_t N, const struct pf
                 // overflow sooner; m / (r2 sqrt(r2)) is monotonic in it.
                 const double stiffness = m/(r2*sqrt(r2));
                 if (j_attracts && stiffness > out[i].stiffness){
-                    out[i] = (struct pfvi_partner){j, g, stiffness};
+                    out[i] = (struct pfvi_partner){j, g, stiffness, 0., 0.};
                 }
                 if (i_attracts && stiffness > out[j].stiffness){
-                    out[j] = (struct pfvi_partner){i, n_images - 1 - g, stiffness};
+                    out[j] = (struct pfvi_partner){i, n_images - 1 - g, stiffness, 0., 0.};
                 }
             }
         }

@@ -254,6 +254,7 @@ static enum pfvi_trial two_point_advance(struct reb_simulation* r, struct pfvi_s
 // kick again gives cos u - (W^2/omega^2 - 1) sin u tan u/2, u = omega h,
 // written so that omega = 0 (Verlet) needs no division.
 static double two_point_half_trace(const struct pfvi_state* st, size_t i, double h, double W2){
+    (void)h;   // (the fit already holds u = omega h)
     const struct pfvi_two_point_fit* const f = &st->fit[i];
     const double cos_u = f->keep + f->cos_u_m_keep;
     // sin u tan u = omega sin u * (h sinc u)/cos u; (W h sinc u)^2/cos u.
