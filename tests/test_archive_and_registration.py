@@ -226,6 +226,134 @@ def test_documentation_lists_every_field():
             sim.integrator.step_control) == ("none", "mean-motion", "partner", 8, 1.0, 0.0, 1e-6, "symmetric")
 
 
+# Each scene empties one of the last step's buffers (stages, variational
+# stages, end state) after an archive's first snapshot held it: written as a
+# field header without data, REBOUND's reader crashed on the file (a
+# hostile trial, six ways). Each ends with the snapshots after its last
+# edit continuing the run bit for bit.
+ARCHIVE_SCENES = {
+    "megno, then stages = 2": """
+        sim.init_megno(seed=3)
+        sim.integrate(1.0)
+        sim.save_to_file(path, interval=1.0, delete_file=True)
+        sim.integrate(4.0)
+        sim.integrator.stages = 2
+        mark = sim.t
+        sim.integrate(9.0)
+    """,
+    "a refused step after an added particle": """
+        sim.integrate(1.0)
+        sim.save_to_file(path, step=1, delete_file=True)
+        sim.integrate(2.0)
+        sim.add(m=1e-6, x=float("nan"), y=0.0, z=0.0)
+        try:
+            sim.integrate(3.0)
+        except RuntimeError as e:
+            assert "not finite" in str(e), e
+        sim.remove(sim.N - 1)
+        mark = sim.t
+        sim.integrate(4.0)
+    """,
+    "megno, an edit, then a refused fixed step": """
+        sim.init_megno(seed=3)
+        sim.integrate(1.0)
+        sim.save_to_file(path, step=1, delete_file=True)
+        sim.integrate(2.0)
+        sim.particles[2].vx *= 1.0001
+        sim.integrator.epsilon = 0.0
+        sim.dt = 50.0
+        try:
+            sim.integrate(100.0)
+        except RuntimeError as e:
+            assert "pfvi" in str(e), e
+        sim.dt = 0.05
+        mark = sim.t
+        sim.integrate(sim.t + 1.0)
+    """,
+    "a load with fewer particles, then stages = 2": """
+        sim.integrate(1.0)
+        sim.save_to_file(path, delete_file=True)
+        sim.integrate(2.0)
+        sim.save_to_file(path)
+        sim.remove(2)
+        sim.save_to_file(path)
+        sim = rebound.Simulationarchive(path)[-1]
+        sim.integrator.stages = 2
+        sim.save_to_file(path, interval=0.5)
+        mark = sim.t
+        sim.integrate(sim.t + 2.0)
+    """,
+}
+
+
+@pytest.mark.parametrize("scene", list(ARCHIVE_SCENES))
+def test_an_archive_whose_run_empties_a_step_buffer_opens_and_continues_the_run(tmp_path, scene):
+    # In a child process, so that the old crash fails this test instead of the suite.
+    body = textwrap.indent(textwrap.dedent(ARCHIVE_SCENES[scene]), "        ")
+    code = f"""
+        import rebound, rebound_pfvi
+        path = {str(tmp_path / "run.bin")!r}
+        sim = rebound.Simulation()
+        sim.add(m=1.0)
+        sim.add(m=1e-3, a=1.0, e=0.3)
+        sim.add(m=1e-3, a=1.7, e=0.1)
+        sim.move_to_com()
+        sim.integrator = "pfvi"
+{body}
+        end, final = sim.t, [p.xyz + p.vxyz for p in sim.particles]
+        archive = rebound.Simulationarchive(path)
+        later = 0
+        for k in range(len(archive)):
+            again = archive[k]            # every snapshot loads
+            if again.t > mark:
+                again.integrate(end)
+                assert again.t == end, (k, again.t, end)
+                assert [p.xyz + p.vxyz for p in again.particles] == final, k
+                later += 1
+        assert later >= 2, later
+        print("ok", len(archive), later)
+    """
+    out = run_python(code)
+    assert out.returncode == 0 and out.stdout.startswith("ok"), (out.returncode, out.stdout, out.stderr[-2000:])
+
+
+@pytest.mark.parametrize("how", ["copy", "archive"])
+@pytest.mark.parametrize("edit", ["G", "softening", "N_active"])
+def test_a_force_model_edited_on_a_copy_at_an_output_starts_from_the_shown_state(tmp_path, how, edit):
+    # A copy (or a snapshot) taken at an output keeps the run's own state for
+    # the next step only if the force model is the one it was drawn under:
+    # with G changed on the copy it went on from a state drawn under the old
+    # G, 9e-5 off the original given the same edit (a hostile trial).
+    def build():
+        sim = rebound.Simulation()
+        sim.add(m=1.0)
+        sim.add(m=1e-3, a=1.0, e=0.3)
+        sim.add(m=1e-3, a=1.7, e=0.1)
+        sim.move_to_com()
+        sim.integrator = "pfvi"
+        return sim
+    sim = build()
+    sim.integrate(1.0)
+    sim.integrate(2.0)
+    assert sim.integrator.n_outputs >= 1
+    if how == "copy":
+        other = sim.copy()
+    else:
+        path = str(tmp_path / "at-output.bin")
+        sim.save_to_file(path)
+        other = rebound.Simulationarchive(path)[-1]
+    for s in (sim, other):
+        if edit == "G":
+            s.G = 1.0001
+        elif edit == "softening":
+            s.softening = 1e-3
+        else:
+            s.testparticle_hidewarnings = 1   # (the third body becomes a test particle of mass 1e-3)
+            s.N_active = 2
+        s.integrate(5.0)
+    assert [p.xyz + p.vxyz for p in other.particles] == [p.xyz + p.vxyz for p in sim.particles]
+
+
 @pytest.mark.parametrize("direction", [1.0, -1.0])
 @pytest.mark.parametrize("variational", [False, True])
 def test_an_archive_begun_after_an_output_opens_and_every_snapshot_continues_the_run(tmp_path, direction,

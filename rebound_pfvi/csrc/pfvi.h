@@ -894,8 +894,18 @@ struct pfvi_compensation {
 // Everything besides the particles, N and t that REBOUND's force evaluation
 // reads (gravity.c, boundary.c, the force hooks), kept with the last step's
 // end acceleration: that acceleration is reused only if this is unchanged,
-// bit for bit (its fields and their REBOUND members: PFVI_FORCE_MODEL_FIELDS
-// in pfvi_state.c).
+// bit for bit. Its fields, listed once: D(double), S(size_t), I(int;
+// REBOUND keeps enums), P(pointer field), each with the REBOUND member it
+// keeps (archives save a shown output's numbers by the same list).
+#define PFVI_FORCE_MODEL_FIELDS(D, S, I, P) \
+    D(G, G) D(softening, softening) D(opening_angle2, opening_angle2) D(root_size, root_size) \
+    D(OMEGA, OMEGA) D(OMEGAZ, OMEGAZ) \
+    S(N_root[0], N_root_x) S(N_root[1], N_root_y) S(N_root[2], N_root_z) S(N_active, N_active) \
+    I(gravity, gravity) I(testparticle_type, testparticle_type) \
+    I(force_is_velocity_dependent, force_is_velocity_dependent) I(boundary, boundary) \
+    I(N_ghost[0], N_ghost_x) I(N_ghost[1], N_ghost_y) I(N_ghost[2], N_ghost_z) \
+    P(additional_forces, additional_forces) P(gravity_custom, gravity_custom) P(extras, extras)
+
 struct pfvi_force_model {
     double G;
     double softening;
@@ -1397,6 +1407,18 @@ struct pfvi_state {
     // after an output).
     size_t output_saved_N;
     size_t output_var_saved_N;
+    // The same for the stages of the last step (predictor_*, var_predictor_*)
+    // and its end (end): their allocated length is what archives write, and
+    // predictor_N, var_predictor_N and end_saved_N are saved as fields of
+    // their own. Those fell to 0 after a refused step, an edit, a change to
+    // stages = 2 with MEGNO or a load with fewer particles, and REBOUND then
+    // could not open the archive (a hostile trial, six ways). counts_saved:
+    // 1 in any snapshot written after a step, 0 in one an older build wrote,
+    // whose buffers were saved at those counts (pfvi_scratch takes them).
+    size_t predictor_length;
+    size_t var_predictor_length;
+    size_t end_length;
+    int counts_saved;
     double output_megno[2][2];     // REBOUND's megno_Ys and megno_Yss: the run's [0] and shown [1]
     double output_t;
     double output_t_real;
@@ -1408,6 +1430,8 @@ struct pfvi_state {
     double end_force_label;
     int output_stages;             // the options the shown output was made with
     double output_epsilon;
+    struct pfvi_force_model output_model;   // and the force model (its numbers saved)
+    int output_model_saved;        // 1: output_model was kept (archives before 2026-11-29 have none)
     struct pfvi_output_check* output_check;   // (output_check_N of them: 0 from an archive without them)
     size_t output_check_N;
     double output_exit_min_distance;   // REBOUND's contact settings the output was shown with
@@ -1735,6 +1759,8 @@ PFVI_INTERNAL enum pfvi_trial pfvi_output_present(struct reb_simulation* r, stru
         int as_is);
 // Whether the force model is the one the last step ended with (1 if no step is kept).
 PFVI_INTERNAL int pfvi_force_model_kept(const struct reb_simulation* r, const struct pfvi_state* st);
+// Keeps the force model a shown output was drawn under (saved in archives).
+PFVI_INTERNAL void pfvi_output_keep_model(const struct reb_simulation* r, struct pfvi_state* st);
 
 /* ---------------------------------------------------------- step control */
 

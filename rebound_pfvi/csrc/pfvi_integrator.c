@@ -331,15 +331,19 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_POINTER, "compensation", offsetof(struct pfvi_state, compensation),
         offsetof(struct pfvi_state, N_compensation), sizeof(struct pfvi_compensation), 0 },
     { "", REB_POINTER, "end_state", offsetof(struct pfvi_state, end),
-        offsetof(struct pfvi_state, end_saved_N), sizeof(struct pfvi_end_state), 0 },
+        offsetof(struct pfvi_state, end_length), sizeof(struct pfvi_end_state), 0 },
     { "", REB_POINTER, "stage_accelerations", offsetof(struct pfvi_state, predictor_a),
-        offsetof(struct pfvi_state, predictor_N), sizeof(*((struct pfvi_state*)0)->predictor_a), 0 },
+        offsetof(struct pfvi_state, predictor_length), sizeof(*((struct pfvi_state*)0)->predictor_a), 0 },
     { "", REB_POINTER, "stage_positions", offsetof(struct pfvi_state, predictor_x),
-        offsetof(struct pfvi_state, predictor_N), sizeof(*((struct pfvi_state*)0)->predictor_x), 0 },
+        offsetof(struct pfvi_state, predictor_length), sizeof(*((struct pfvi_state*)0)->predictor_x), 0 },
     { "", REB_POINTER, "variational_stage_accelerations", offsetof(struct pfvi_state, var_predictor_a),
-        offsetof(struct pfvi_state, var_predictor_N), sizeof(*((struct pfvi_state*)0)->var_predictor_a), 0 },
+        offsetof(struct pfvi_state, var_predictor_length), sizeof(*((struct pfvi_state*)0)->var_predictor_a), 0 },
     { "", REB_POINTER, "variational_stage_positions", offsetof(struct pfvi_state, var_predictor_x),
-        offsetof(struct pfvi_state, var_predictor_N), sizeof(*((struct pfvi_state*)0)->var_predictor_x), 0 },
+        offsetof(struct pfvi_state, var_predictor_length), sizeof(*((struct pfvi_state*)0)->var_predictor_x), 0 },
+    { "", REB_UINT64, "end_state_count", offsetof(struct pfvi_state, end_saved_N), 0, 0, 0 },
+    { "", REB_UINT64, "stage_count", offsetof(struct pfvi_state, predictor_N), 0, 0, 0 },
+    { "", REB_UINT64, "variational_stage_count", offsetof(struct pfvi_state, var_predictor_N), 0, 0, 0 },
+    { "", REB_INT, "counts_saved", offsetof(struct pfvi_state, counts_saved), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_reversible", offsetof(struct pfvi_state, dt_reversible), 0, 0, 0 },
     { "", REB_INT, "unpaired_suspect", offsetof(struct pfvi_state, unpaired_suspect), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_suspect", offsetof(struct pfvi_state, dt_suspect), 0, 0, 0 },
@@ -397,6 +401,20 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "output_t_real", offsetof(struct pfvi_state, output_t_real), 0, 0, 0 },
     { "", REB_INT, "output_stages", offsetof(struct pfvi_state, output_stages), 0, 0, 0 },
     { "", REB_DOUBLE, "output_epsilon", offsetof(struct pfvi_state, output_epsilon), 0, 0, 0 },
+    // The numbers of the shown output's force model (pfvi_force_model_kept).
+#define PFVI_MODEL_DOUBLE(field, member) \
+    { "", REB_DOUBLE, "output_model_" #member, offsetof(struct pfvi_state, output_model.field), 0, 0, 0 },
+#define PFVI_MODEL_SIZE(field, member) \
+    { "", REB_UINT64, "output_model_" #member, offsetof(struct pfvi_state, output_model.field), 0, 0, 0 },
+#define PFVI_MODEL_INT(field, member) \
+    { "", REB_INT, "output_model_" #member, offsetof(struct pfvi_state, output_model.field), 0, 0, 0 },
+#define PFVI_MODEL_POINTER(field, member)
+    PFVI_FORCE_MODEL_FIELDS(PFVI_MODEL_DOUBLE, PFVI_MODEL_SIZE, PFVI_MODEL_INT, PFVI_MODEL_POINTER)
+#undef PFVI_MODEL_DOUBLE
+#undef PFVI_MODEL_SIZE
+#undef PFVI_MODEL_INT
+#undef PFVI_MODEL_POINTER
+    { "", REB_INT, "output_model_saved", offsetof(struct pfvi_state, output_model_saved), 0, 0, 0 },
     { "", REB_DOUBLE, "output_last_t0", offsetof(struct pfvi_state, output_last_t0), 0, 0, 0 },
     { "", REB_DOUBLE, "output_last_t1", offsetof(struct pfvi_state, output_last_t1), 0, 0, 0 },
     // (The values REBOUND restores sim.dt to after integrate(), pfvi_step:

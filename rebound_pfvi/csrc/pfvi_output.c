@@ -384,6 +384,7 @@ enum pfvi_trial pfvi_output_present(struct reb_simulation* r, struct pfvi_state*
     st->output_t_real = t_real;
     st->output_stages = st->options.stages;
     st->output_epsilon = st->options.epsilon;
+    pfvi_output_keep_model(r, st);
     st->statistics.n_outputs++;
     st->statistics.n_variational_evaluations += st->trial.variational_evaluations;
     return PFVI_TRIAL_OK;

@@ -91,7 +91,29 @@ static void* pfvi_grow(void* buffer, size_t size, int* ok){
     return grown;
 }
 
+// The smaller of two lengths: what a buffer holds after a growth that may
+// have failed part way (each buffer then its old length or n).
+static size_t length_after(int ok, size_t old, size_t n){
+    return ok ? n : ((old < n) ? old : n);
+}
+
+// The counts of the last step's stages and end, after a load or copy: at
+// most what the snapshot's buffers hold, or those buffers' lengths where
+// an older build saved no counts (its buffers were saved at them).
+static void counts_of_snapshot(struct pfvi_state* st){
+    if (!st->counts_saved){
+        st->predictor_N = st->predictor_length;
+        st->var_predictor_N = st->var_predictor_length;
+        st->end_saved_N = st->end_length;
+        st->counts_saved = 1;
+    }
+    st->predictor_N = (st->predictor_N <= st->predictor_length) ? st->predictor_N : 0;
+    st->var_predictor_N = (st->var_predictor_N <= st->var_predictor_length) ? st->var_predictor_N : 0;
+    st->end_saved_N = (st->end_saved_N <= st->end_length) ? st->end_saved_N : 0;
+}
+
 int pfvi_scratch(struct pfvi_state* st, size_t N){
+    counts_of_snapshot(st);
     if (st->N_compensation != N){
         // New or removed particles: the low-order parts no longer belong to
         // anyone. (Particles edited in place: pfvi_forget_edited.)
@@ -153,7 +175,9 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->output_real = pfvi_grow(st->output_real, N*sizeof(*st->output_real), &ok);
     st->output_shown = pfvi_grow(st->output_shown, N*sizeof(*st->output_shown), &ok);
     st->output_check = pfvi_grow(st->output_check, N*sizeof(*st->output_check), &ok);
-    st->output_saved_N = ok ? N : st->output_saved_N;
+    st->output_saved_N = length_after(ok, st->output_saved_N, N);
+    st->predictor_length = length_after(ok, st->predictor_length, N);
+    st->end_length = length_after(ok, st->end_length, N);
     if (st->output_N > N){
         st->output_N = 0;  // as the predictor's, after an archive with fewer particles
     }
@@ -216,7 +240,8 @@ int pfvi_var_scratch(struct pfvi_state* st, size_t n){
     st->var_dv = pfvi_grow(st->var_dv, n*sizeof(*st->var_dv), &ok);
     st->output_var_real = pfvi_grow(st->output_var_real, n*sizeof(*st->output_var_real), &ok);
     st->output_var_shown = pfvi_grow(st->output_var_shown, n*sizeof(*st->output_var_shown), &ok);
-    st->output_var_saved_N = ok ? n : st->output_var_saved_N;
+    st->output_var_saved_N = length_after(ok, st->output_var_saved_N, n);
+    st->var_predictor_length = length_after(ok, st->var_predictor_length, n);
     if (st->output_var_N > n){
         st->output_var_N = 0;
         st->output_N = 0;
@@ -300,17 +325,6 @@ static inline int same_bits(const double* a, const double* b, int n){
     return differ == 0;
 }
 
-// The force model's fields, listed once: D(double), S(size_t), I(int; REBOUND keeps enums),
-// P(pointer field), each with the REBOUND member it keeps.
-#define PFVI_FORCE_MODEL_FIELDS(D, S, I, P) \
-    D(G, G) D(softening, softening) D(opening_angle2, opening_angle2) D(root_size, root_size) \
-    D(OMEGA, OMEGA) D(OMEGAZ, OMEGAZ) \
-    S(N_root[0], N_root_x) S(N_root[1], N_root_y) S(N_root[2], N_root_z) S(N_active, N_active) \
-    I(gravity, gravity) I(testparticle_type, testparticle_type) \
-    I(force_is_velocity_dependent, force_is_velocity_dependent) I(boundary, boundary) \
-    I(N_ghost[0], N_ghost_x) I(N_ghost[1], N_ghost_y) I(N_ghost[2], N_ghost_z) \
-    P(additional_forces, additional_forces) P(gravity_custom, gravity_custom) P(extras, extras)
-
 static void force_model_keep(const struct reb_simulation* r, struct pfvi_force_model* m){
 #define PFVI_KEEP(field, member) m->field = r->member;
 #define PFVI_KEEP_INT(field, member) m->field = (int)r->member;
@@ -365,8 +379,37 @@ void pfvi_step_model_apply_pending(struct reb_simulation* r, struct pfvi_state* 
     }
 }
 
+// Whether REBOUND's numbers are a kept model's (its pointers not compared).
+static int force_model_same_numbers(const struct reb_simulation* r, const struct pfvi_force_model* m){
+    int changed = 0;
+#define PFVI_SAME_DOUBLE(field, member) changed |= !same_bits(&m->field, &r->member, 1);
+#define PFVI_SAME(field, member) changed |= (m->field != r->member);
+#define PFVI_SAME_INT(field, member) changed |= (m->field != (int)r->member);
+#define PFVI_SKIP(field, member)
+    PFVI_FORCE_MODEL_FIELDS(PFVI_SAME_DOUBLE, PFVI_SAME, PFVI_SAME_INT, PFVI_SKIP)
+#undef PFVI_SAME_DOUBLE
+#undef PFVI_SAME
+#undef PFVI_SAME_INT
+#undef PFVI_SKIP
+    return !changed;
+}
+
 int pfvi_force_model_kept(const struct reb_simulation* r, const struct pfvi_state* st){
-    return st->end_N != r->N || force_model_unchanged(r, &st->cache_model);
+    if (st->end_N == r->N){
+        return force_model_unchanged(r, &st->cache_model);
+    }
+    // A loaded or copied simulation keeps no end (end_N is 0): the numbers
+    // of the model its shown output was drawn under, as the snapshot saved
+    // them (its callbacks' addresses are new). Without them, G changed on a
+    // copy went on from the run's state drawn under the old G (a hostile
+    // trial: 9e-5 off). An archive written before they were saved has none:
+    // taken as kept, as then.
+    return !st->output_model_saved || force_model_same_numbers(r, &st->output_model);
+}
+
+void pfvi_output_keep_model(const struct reb_simulation* r, struct pfvi_state* st){
+    force_model_keep(r, &st->output_model);
+    st->output_model_saved = 1;
 }
 
 int pfvi_end_is_start(const struct reb_simulation* r, const struct pfvi_state* st){
