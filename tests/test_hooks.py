@@ -244,3 +244,39 @@ def test_a_heartbeat_that_edits_every_step_never_sees_a_time_past_the_output():
         sim.integrate(requested[0])
     past = [(r, t, d) for r, t, d in seen if t > r or d < 0.0]
     assert len(seen) > 100 and past == []
+
+
+@pytest.mark.parametrize("epsilon", [0.0, 1e-10])
+def test_a_force_that_reads_an_ode_sees_its_state_at_every_step_start(epsilon):
+    # REBOUND steps the ODEs after each step; a force callback reading their
+    # state must be evaluated anew at the next step's start. pfvi kept the
+    # last step's end force there, so a heartbeat that does nothing (which
+    # stops the keeping) moved the run: 1e-4 with fixed steps, 0.1 with
+    # epsilon 1e-10, where the stale start made 715 steps of 11 (a hostile
+    # trial).
+    def run(heartbeat):
+        sim = rebound.Simulation()
+        sim.add(m=1.0)
+        sim.add(m=1e-3, a=1.0, e=0.5)
+        sim.move_to_com()
+        sim.integrator = "pfvi"
+        sim.integrator.epsilon = epsilon
+        sim.dt = 0.01
+        ode = sim.create_ode(length=1, needs_nbody=False)
+
+        def decay(ode, y_dot, y, t):
+            y_dot[0] = -2.0 * y[0]
+        ode.derivatives = decay
+        ode.y[0] = 1.0
+
+        def force(simp):
+            simp.contents.particles[1].ax += 0.05 * ode.y[0]
+        sim.additional_forces = force
+        if heartbeat:
+            sim.heartbeat = lambda simp: None
+        sim.integrate(5.0)
+        return [p.xyz + p.vxyz for p in sim.particles], sim.integrator.n_steps
+    quiet, loud = run(False), run(True)
+    assert quiet == loud
+    if epsilon:
+        assert quiet[1] < 30   # measured 11 (715 with the stale start)

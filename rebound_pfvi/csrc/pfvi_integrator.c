@@ -438,7 +438,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         REB_UINT64, n_u_limited),
     PFVI_STATISTIC("force evaluations (calls of reb_simulation_update_acceleration). A step "
         "reuses the last step's end acceleration only within one integrate() or steps() call, with no "
-        "heartbeat set and nothing the force reads changed (particles, t, G, softening, N_active, "
+        "heartbeat or timestep hook set, no ODE beside a force callback, and nothing the force reads "
+        "changed (particles, t, G, softening, N_active, "
         "testparticle_type, gravity mode, boundary, additional_forces, extras); otherwise it evaluates "
         "it afresh.",
         REB_UINT64, n_force_evaluations),
@@ -887,10 +888,14 @@ static int pfvi_step_start(struct reb_simulation* r, struct pfvi_state* st, size
     // from the last step unless anything may have changed the forces: a new
     // integrate() or steps() call (REBOUND resets dt_last_done to 0, or
     // synchronizes at the end of the last), a heartbeat (it may change
-    // anything), velocity-dependent forces, or any bit of N, t, the force
+    // anything), velocity-dependent forces, ODEs beside a force callback
+    // (REBOUND steps them after the step; a force that reads their state
+    // reads it anew: one kept saw the last step's, and a no-op heartbeat
+    // moved a run by 1e-4, a hostile trial), or any bit of N, t, the force
     // model (struct pfvi_force_model), a position, velocity or mass.
+    // (Timestep hooks: REBOUND synchronizes before them, which drops the end.)
     const int reuse = (r->dt_last_done != 0. || st->output_taken_up) && !r->force_is_velocity_dependent && !r->heartbeat
-        && pfvi_end_is_start(r, st);
+        && !(r->N_odes && pfvi_forces_run_user_code(r)) && pfvi_end_is_start(r, st);
     if (!reuse){
         // Checked before anything is changed, so that a refusal leaves the
         // integrator's own state as it was too.
