@@ -1314,6 +1314,15 @@ struct pfvi_state {
     // REBOUND, which did not finish, restores the dt the call began with):
     // set as the call ends. 0: REBOUND's restore stands.
     double request_dt_leaves;
+    // A loaded or copied simulation whose call began on REBOUND's cut to
+    // the requested time (its snapshot was written as REBOUND finished on
+    // an output: sim.dt the cut, dt_last_done the run's step before it):
+    // REBOUND restores the cut after the call, where the run it continues
+    // had its step before the cut restored. request_dt_last_done: the
+    // simulation's dt_last_done as the call began; request_loaded_cut: the
+    // call's first step was that cut (pfvi_request_end puts the run's value back).
+    double request_dt_last_done;
+    int request_loaded_cut;
     // The sim.dt REBOUND leaves after an integrate() that ended on an output
     // (its last full step: the dt_last_done before the finishing step, or
     // the dt the call started with), so that a sim.dt the user sets after

@@ -1616,8 +1616,16 @@ static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
     // (what the last call left, unless the user set one since: then the
     // user's, honoured either way).
     const int finishing = (r->status == REB_STATUS_LAST_STEP);
-    if (finishing && !st->last_finishing && r->dt_last_done != 0.){
-        st->dt_rebound_leaves = r->dt_last_done;
+    // A loaded or copied simulation's call that begins on REBOUND's cut (its
+    // snapshot written as REBOUND finished on an output: sim.dt the cut,
+    // dt_last_done the run's step before it, which integrate() reset): as
+    // the run it continues, whose last full step that was (request_end
+    // leaves it as sim.dt where REBOUND restores the cut).
+    const int loaded_cut = finishing && !st->last_finishing && r->dt_last_done == 0. && st->end_N == 0
+        && st->request_set && st->request_dt_last_done != 0.;
+    st->request_loaded_cut = st->request_loaded_cut || loaded_cut;
+    if (finishing && !st->last_finishing && (r->dt_last_done != 0. || loaded_cut)){
+        st->dt_rebound_leaves = loaded_cut ? st->request_dt_last_done : r->dt_last_done;
         // (REBOUND restores that, not the value the call began with.)
         st->dt_call_began = 0.;
         st->dt_call_default = 0;
@@ -1652,7 +1660,7 @@ static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
         st->dt_call_default = by_default;
         st->dt_call_first_cut = 0;
         st->dt_call_cut = 0.;
-    }else if (call_start && finishing && loaded){
+    }else if (call_start && finishing && loaded && !loaded_cut){
         st->dt_call_cut = st->dt_at_start;
         if (fresh && cut_from_known && fabs(st->dt_at_sync) == PFVI_REBOUND_DT_DEFAULT){
             // REBOUND cut a new simulation's 0.001 to a time within it, and
@@ -1787,6 +1795,8 @@ double pfvi_request_begin(struct reb_simulation* r, double t){
     st->request_set = 1;
     st->request_t = t;
     st->request_dt_leaves = 0.;
+    st->request_dt_last_done = r->dt_last_done;   // (REBOUND's integrate() resets it)
+    st->request_loaded_cut = 0;
     return held;
 }
 
@@ -1799,7 +1809,17 @@ void pfvi_request_end(struct reb_simulation* r, double held){
             && st->in_step == PFVI_STEP_IDLE){
         // The call ends: sim.dt as REBOUND's own finish on the time leaves it.
         r->dt = st->request_dt_leaves;
+    }else if (st->request_set && st->request_loaded_cut && r->exact_finish_time == 1 && st->in_step == PFVI_STEP_IDLE
+            && fabs(r->dt) != fabs(st->request_dt_last_done)){
+        // REBOUND restored the cut a loaded simulation's call began on (its
+        // last full step, to REBOUND); the run it continues had its step
+        // before the cut restored. Taken as a cap, the cut made a restarted
+        // archive of a run with a timestep hook or a heartbeat that edits
+        // every step, and outputs, take a step the run did not (4 of 12
+        // snapshots off, 1.6e-2: a hostile trial).
+        r->dt = copysign(st->request_dt_last_done, r->dt);
     }
+    st->request_loaded_cut = 0;
     st->request_dt_leaves = 0.;
     st->request_set = !isnan(held);
     st->request_t = st->request_set ? held : 0.;
