@@ -23,6 +23,7 @@ own field list when the package is imported.
 """
 import ctypes as _ctypes
 import math as _math
+import operator as _operator
 from typing import Any, Dict, Tuple
 
 from ._core import INTEGRATOR_NAME, lib as _lib
@@ -193,11 +194,18 @@ def _refuse_integers_that_wrap():
         if self.name == INTEGRATOR_NAME.encode() and name in _STATISTICS:
             # (The docs say read-only; REBOUND wrote them: n_steps = 5 counted on from 5.)
             raise AttributeError(f"integrator.{name} is a statistic pfvi counts (read-only); not set")
-        if self.name == INTEGRATOR_NAME.encode() and isinstance(value, int) and not isinstance(value, bool):
+        integer = None
+        if self.name == INTEGRATOR_NAME.encode() and not isinstance(value, bool):
+            # (any integer: numpy's int64 and 0-d integer arrays wrapped too, a hostile trial)
+            try:
+                integer = _operator.index(value)
+            except TypeError:
+                integer = None
+        if integer is not None:
             descriptor = self.callbacks.field_descriptor_list.field_descriptor_for_name(name)
             low, high = limits.get(REB_BINARYDATA_DTYPE.get(descriptor.dtype), (None, None))
-            if low is not None and not low <= value <= high:
-                raise ValueError(f"integrator.{name} = {value} does not fit the field's C type "
+            if low is not None and not low <= integer <= high:
+                raise ValueError(f"integrator.{name} = {integer} does not fit the field's C type "
                                  f"({low} to {high}); not set")
         if self.name != INTEGRATOR_NAME.encode():
             return generic(self, name, value)
