@@ -491,6 +491,14 @@ def run_compare(parser: argparse.ArgumentParser, args: argparse.Namespace, argv:
     return 130 if results.interrupted else 1 if failed else 0
 
 
+def _written(output: str, name: str) -> str:
+    """The files a paper figure wrote (its .png only with the [plot] extra)."""
+    import os
+
+    kinds = [k for k in (".md", ".png", ".json") if os.path.exists(os.path.join(output, name + k))]
+    return f"{output}/{name}" + ", ".join(kinds)
+
+
 def run_paper(args: argparse.Namespace, argv: List[str]) -> int:
     from . import STAGES
     from . import paper as seed_paper
@@ -526,7 +534,7 @@ def run_paper(args: argparse.Namespace, argv: List[str]) -> int:
             return 130
         finally:
             bar.close()
-        print(f"Figure 1: {len(rows)} tolerances; wrote {args.output}/figure1.md, .png, .json")
+        print(f"Figure 1: {len(rows)} tolerances; wrote {_written(args.output, 'figure1')}")
         return 0
     stages, control = args.stages or 4, args.step_control or "reversible"
     if args.figure == "fig2":
@@ -542,13 +550,13 @@ def run_paper(args: argparse.Namespace, argv: List[str]) -> int:
             return 130
         finally:
             samples_bar.close()
-        print(f"Figure 2: {rows[-1]['steps']} steps, run time {wall:.1f} s; wrote {args.output}/figure2.md, .png, .json")
+        print(f"Figure 2: {rows[-1]['steps']} steps, run time {wall:.1f} s; wrote {_written(args.output, 'figure2')}")
         return 0
     periods = args.periods or 10
     command = invocation(argv)
     rows, wall = seed_paper.figure3(args.output, periods=periods, stages=stages, epsilon=args.epsilon,
                                     step_control=control, command=command)
-    print(f"Figure 3: {len(rows)} steps, run time {wall:.1f} s; wrote {args.output}/figure3.md, .png, .json")
+    print(f"Figure 3: {len(rows)} steps, run time {wall:.1f} s; wrote {_written(args.output, 'figure3')}")
     return 0
 
 

@@ -183,7 +183,8 @@ def figure1(output: str, eccentricities: Sequence[float] = ECCENTRICITIES, epsil
     tick = time.perf_counter()
     rows = figure1_rows(eccentricities, epsilons, stages, step_control, progress)
     wall = time.perf_counter() - tick
-    figure1_plot(rows, os.path.join(output, "figure1.png"))
+    figure = _figure(lambda: figure1_plot(rows, os.path.join(output, "figure1.png")),
+                     "![steps against energy error](figure1.png)")
     with open(os.path.join(output, "figure1.json"), "w") as f:
         json.dump(rows, f, indent=1)
     summary = []
@@ -218,7 +219,7 @@ counted.
 |---|---|---|---|
 """ + "\n".join(summary) + f"""
 
-![steps against energy error](figure1.png)
+{figure}
 
 {figure1_table(rows)}
 """
@@ -248,8 +249,11 @@ def figure2_rows(e: float = 0.95, periods: float = 1e5, samples: int = 2000, sta
     """Relative energy error and position error against time (seed Figure 2).
 
     The run stops at `samples` evenly spaced times without changing its steps
-    (exact_finish_time=0), so the samples are not every step. The position
-    error is the distance from the exact Kepler position at the same time.
+    (exact_finish_time=0): a row at the first step's end at or past each, so
+    the samples are not every step, and a step past several of them gives one
+    row (fewer rows than samples where steps are longer than their spacing).
+    The position error is the distance from the exact Kepler position at the
+    same time.
     """
     periods, samples = checks.positive_number(periods, "periods"), checks.positive_int(samples, "samples")
     epsilon = checks.positive_number(epsilon, "epsilon")
@@ -260,7 +264,12 @@ def figure2_rows(e: float = 0.95, periods: float = 1e5, samples: int = 2000, sta
     _pfvi(sim, stages, epsilon, step_control)
     rows = []
     for k in range(1, samples + 1):
-        sim.integrate(periods * period * k / samples, exact_finish_time=0)
+        t_k = periods * period * k / samples
+        if sim.t >= t_k:
+            # (integrate() with exact_finish_time=0 would step back to it: 463
+            # of 2000 samples went backwards over 10 periods, a hostile trial)
+            continue
+        sim.integrate(t_k, exact_finish_time=0)
         d = sim.particles[1] - sim.particles[0]
         exact = kepler_relative(sim.G, 1.0, 0.0, elements, sim.t)
         rows.append({"t_periods": sim.t / period, "energy_error": abs(_specific_energy(sim) / E0 - 1.0),
@@ -289,6 +298,17 @@ def figure3_rows(e: float = 0.95, periods: float = 10, stages: int = 4, epsilon:
         rows.append({"t_periods": sim.t / period, "omega": curvature_frequency(sim.particles[1]),
                      "omega_exact": curvature_frequency(exact), "dt": sim.dt_last_done})
     return rows
+
+
+def _figure(plot: Callable[[], None], link: str) -> str:
+    """The page's figure line: `link` where `plot()` drew it, else a note
+    (matplotlib is the optional [plot] extra; without it the page, its JSON
+    and its numbers are written all the same, as compare's are)."""
+    try:
+        plot()
+    except ImportError:
+        return "(No plot: matplotlib is not installed; pip install 'rebound_pfvi[plot]'.)"
+    return link
 
 
 def _time_plot(path, curves, title, ylabel):
@@ -330,10 +350,12 @@ def figure2(output: str, e: float = 0.95, periods: float = 1e5, samples: int = 2
     rows = figure2_rows(e, periods, samples, stages, epsilon, step_control, progress)
     wall = time.perf_counter() - tick
     t = [r["t_periods"] for r in rows]
-    _time_plot(os.path.join(output, "figure2.png"),
-               [(t, [max(r["energy_error"], 1e-17) for r in rows], "-", {"label": "relative energy error"}),
-                (t, [r["position_error"] for r in rows], "--", {"label": "position error (units of a)"})],
-               f"e = {e}, pfvi s = {stages}, epsilon = {epsilon:g}, {step_control}; sampled {samples} times", None)
+    figure = _figure(lambda: _time_plot(
+        os.path.join(output, "figure2.png"),
+        [(t, [max(r["energy_error"], 1e-17) for r in rows], "-", {"label": "relative energy error"}),
+         (t, [r["position_error"] for r in rows], "--", {"label": "position error (units of a)"})],
+        f"e = {e}, pfvi s = {stages}, epsilon = {epsilon:g}, {step_control}; sampled {samples} times", None),
+        "![energy and position error against time](figure2.png)")
     with open(os.path.join(output, "figure2.json"), "w") as f:
         json.dump({"e": e, "periods": periods, "samples": samples, "stages": stages, "epsilon": epsilon,
                    "step_control": step_control, "wall_s": wall, "rows": rows}, f, indent=0)
@@ -347,7 +369,8 @@ Problem (seed section 5): a massless body about a unit mass at rest, G = 1,
 from pericentre, e = {e}, {periods:g} periods; pfvi with stages = {stages},
 epsilon = {epsilon:g}, step_control = "{step_control}", fitting "phase".
 Relative energy error and position error (distance from the exact Kepler
-position, in units of a) at {samples} evenly spaced times (not every step).
+position, in units of a) at the first step's end at or past each of {samples}
+evenly spaced times (not every step; {len(rows)} rows, one per step that passed any).
 
 **Seed's claim:** "the method keeps both energy and position error in stable
 limits" over 10^5 periods at e = 0.95.
@@ -359,7 +382,7 @@ first tenth {first[-1]['position_error']:.2e}, at the end {last[-1]['position_er
 (the position error of a conservative scheme grows through the phase: the
 orbit's shape is kept, its timing drifts).
 
-![energy and position error against time](figure2.png)
+{figure}
 """
     with open(os.path.join(output, "figure2.md"), "w") as f:
         f.write(text)
@@ -378,11 +401,13 @@ def figure3(output: str, e: float = 0.95, periods: float = 10, stages: int = 4, 
     rows = figure3_rows(e, periods, stages, epsilon, step_control)
     wall = time.perf_counter() - tick
     t = [r["t_periods"] for r in rows]
-    _time_plot(os.path.join(output, "figure3.png"),
-               [(t, [r["omega_exact"] for r in rows], "-", {"color": "0.6", "lw": 1.5, "label": "exact orbit"}),
-                (t, [r["omega"] for r in rows], ".", {"ms": 2, "label": "pfvi, at every step"})],
-               f"e = {e}, pfvi s = {stages}, epsilon = {epsilon:g}, {step_control}",
-               "curvature frequency |v x a| / |v|^2")
+    figure = _figure(lambda: _time_plot(
+        os.path.join(output, "figure3.png"),
+        [(t, [r["omega_exact"] for r in rows], "-", {"color": "0.6", "lw": 1.5, "label": "exact orbit"}),
+         (t, [r["omega"] for r in rows], ".", {"ms": 2, "label": "pfvi, at every step"})],
+        f"e = {e}, pfvi s = {stages}, epsilon = {epsilon:g}, {step_control}",
+        "curvature frequency |v x a| / |v|^2"),
+        "![curvature frequency](figure3.png)")
     with open(os.path.join(output, "figure3.json"), "w") as f:
         json.dump({"e": e, "periods": periods, "stages": stages, "epsilon": epsilon, "step_control": step_control,
                    "wall_s": wall, "rows": rows}, f, indent=0)
@@ -408,7 +433,7 @@ exact orbit's value {worst:.1e}. The steps crowd at pericentre, where omega
 peaks: {sum(1 for w in omegas if w > 0.5 * max(omegas))} of {len(omegas)} steps
 have omega above half its peak.
 
-![curvature frequency](figure3.png)
+{figure}
 """
     with open(os.path.join(output, "figure3.md"), "w") as f:
         f.write(text)

@@ -168,3 +168,26 @@ def test_a_quantity_for_a_simulation_without_units_says_how_to_set_them():
         "give a plain number in its time unit, or set its units before adding particles, e.g. "
         "sim.units = ('AU', 'yr', 'Msun') or ('m', 's', 'kg')")
     assert scenes.Custom(_two_bodies(None), 2.0).describe().endswith("in its own units")
+
+
+def test_figure2_samples_go_forward_and_each_row_is_a_step_end():
+    # Sampled with exact_finish_time = 0, a step past several sampling times
+    # made the next integrate() go back: 463 of 2000 samples over 10 periods
+    # went backwards, and over 1 period the reversible control refused a
+    # step back (a hostile trial).
+    rows = paper.figure2_rows(periods=10, samples=2000)
+    times = [r["t_periods"] for r in rows]
+    assert 100 < len(rows) <= 2000
+    assert all(b > a for a, b in zip(times, times[1:]))
+    assert times[-1] >= 10.0
+
+
+def test_a_paper_figure_without_matplotlib_writes_its_page_and_data(tmp_path, monkeypatch):
+    # matplotlib is the optional [plot] extra: without it the figure ended in
+    # a traceback after the run and left nothing (a hostile trial).
+    import sys
+    monkeypatch.setitem(sys.modules, "matplotlib", None)
+    paper.figure3(str(tmp_path), periods=1)
+    page = (tmp_path / "figure3.md").read_text()
+    assert "No plot: matplotlib is not installed" in page and "](figure3.png)" not in page
+    assert (tmp_path / "figure3.json").exists() and not (tmp_path / "figure3.png").exists()
