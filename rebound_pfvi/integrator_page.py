@@ -159,10 +159,27 @@ def page() -> str:
     return "\n".join(lines)
 
 
-if __name__ == "__main__":
+def main(argv: List[str]) -> int:
+    """python -m rebound_pfvi.integrator_page [PATH]: the page to PATH, or to standard output."""
+    asked = bool(argv) and argv[0] in ("-h", "--help")
+    if asked or len(argv) > 1 or (argv and argv[0].startswith("-")):
+        # (a hostile trial: --help was taken for the path, and a 33 kB file named "--help" written)
+        print("usage: python -m rebound_pfvi.integrator_page [PATH]\n\n"
+              "Writes docs/integrator.md's text (every option and statistic, from the C core's strings)\n"
+              "to PATH, or to standard output without one.", file=sys.stdout if asked else sys.stderr)
+        return 0 if asked else 2
     text = page()
-    if len(sys.argv) > 1:
-        with open(sys.argv[1], "w", encoding="utf-8") as out:
-            out.write(text)
-    else:
+    if not argv:
         sys.stdout.write(text)
+        return 0
+    try:
+        with open(argv[0], "w", encoding="utf-8") as out:
+            out.write(text)
+    except OSError as error:
+        print(f"integrator_page: cannot write {argv[0]}: {error.strerror}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

@@ -1,9 +1,10 @@
 """Units at the public boundary; the core and the scenes' numbers stay unitless.
 
 Every scene runs in one unit system, REBOUND's ``sim.units = ("AU", "yr",
-"Msun")``. Its G is the only G in rebound_pfvi: REBOUND computes it (39.4769264
-AU^3 / (Msun yr^2), i.e. the IAU nominal GM_sun) and nothing here takes G from
-astropy. astropy only converts user Quantities into AU, yr and Msun and back
+"Msun")``. Its G is the only G in rebound_pfvi: REBOUND computes it
+(39.476926421 AU^3 / (Msun yr^2): Gauss's constant k = 0.01720209895 squared,
+per day^2, times 365.25^2; the IAU 2015 nominal GM_sun gives 39.476926409,
+3e-10 less) and nothing here takes G from astropy. astropy only converts user Quantities into AU, yr and Msun and back
 (``.to_value(unit)`` in, ``<< unit`` out), so ratios of masses given in Msun,
 Mjup or Mearth carry the nominal GM ratios and no G at all. A mass given in kg
 goes through astropy's M_sun, which is GM_sun / G(CODATA 2018); REBOUND's own
@@ -57,15 +58,17 @@ def parse(text: str, kind: str, name: str) -> Any:
     `name` is the argument's name, used in the error when the text is not a
     number with a unit of the right kind."""
     u = _u()
+    # (the kinds with no list of their own, speed and energy per mass, in the scene's unit)
+    allowed = ALLOWED.get(kind) or (scene_unit(kind).to_string(),)
     try:
         value = u.Quantity(text)
     except (TypeError, ValueError) as error:
         raise ValueError(f"{name}: cannot read {text!r} as a quantity ({_unit_error(error)}); "
-                         f"write a number and a unit, e.g. \"1 {ALLOWED[kind][0]}\" "
-                         f"(units: {', '.join(ALLOWED[kind])})") from None
+                         f"write a number and a unit, e.g. \"1 {allowed[0]}\" "
+                         f"(units: {', '.join(allowed)})") from None
     if value.unit == u.dimensionless_unscaled:
         raise ValueError(f"{name}: {text!r} has no unit; write a number and a unit, e.g. "
-                         f"\"{text.strip()} {ALLOWED[kind][0]}\" (units: {', '.join(ALLOWED[kind])})")
+                         f"\"{text.strip()} {allowed[0]}\" (units: {', '.join(allowed)})")
     # The text as the user wrote it, for errors about the value (show());
     # astropy keeps it on this Quantity only, not on what is computed from it.
     value.info.description = " ".join(text.split())
@@ -108,9 +111,12 @@ def to_unit(value: Any, kind: str, unit: Any, name: str) -> float:
     in `unit` (an astropy unit or its name). `name` names the argument in
     errors, which name the kind a Quantity of another kind is not."""
     u = _u()
+    if not getattr(value, "isscalar", True):
+        raise ValueError(f"{name}={show(value)} is not a single value; give one quantity")
     try:
-        # Frequencies may be given in rad/time; radians are dimensionless here.
-        number = value.to_value(unit, equivalencies=u.dimensionless_angles())
+        # Frequencies may be given in rad/time; radians are dimensionless
+        # there (and nowhere else: "1 AU rad" is no length).
+        number = value.to_value(unit, equivalencies=u.dimensionless_angles() if kind == "frequency" else [])
     except u.UnitConversionError:
         raise ValueError(f"{name}={show(value)} has unit {value.unit}, which is not a {kind}; "
                          f"allowed: {', '.join(ALLOWED.get(kind, (str(unit),)))}") from None

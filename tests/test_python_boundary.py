@@ -191,3 +191,59 @@ def test_a_paper_figure_without_matplotlib_writes_its_page_and_data(tmp_path, mo
     page = (tmp_path / "figure3.md").read_text()
     assert "No plot: matplotlib is not installed" in page and "](figure3.png)" not in page
     assert (tmp_path / "figure3.json").exists() and not (tmp_path / "figure3.png").exists()
+
+
+@pytest.mark.parametrize("hook", ["post_timestep_modifications", "pre_timestep_modifications", "heartbeat", "ode",
+                                  "collision_resolve", "reboundx"])
+def test_a_custom_scene_refuses_what_its_copy_would_drop(hook):
+    # A copy keeps no timestep hook, heartbeat, ODE, resolve function or
+    # REBOUNDx: the comparison integrated another problem and called it
+    # accurate (REBOUNDx's migration dropped, a = 1.000 against the user's
+    # 0.606; a hostile trial).
+    sim = _two_bodies(("AU", "yr", "Msun"))
+    if hook in ("post_timestep_modifications", "pre_timestep_modifications", "heartbeat"):
+        setattr(sim, hook, lambda simp: None)
+        named = hook
+    elif hook == "ode":
+        ode = sim.create_ode(length=1)
+        ode.derivatives = lambda ode, y_dot, y, t: None
+        named = "an ODE"
+    elif hook == "collision_resolve":
+        sim.collision = "direct"
+        sim.collision_resolve = "merge"
+        named = "collision_resolve"
+    else:
+        reboundx = pytest.importorskip("reboundx")
+        extras = reboundx.Extras(sim)  # noqa: F841  (attached to sim)
+        named = "REBOUNDx"
+    with pytest.raises(ValueError, match=rf"^sim: .*{named}.* set; a copy of the simulation does not keep"):
+        scenes.Custom(sim, 1.0)
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda: scenes.Kepler(a=[1.0, 2.0] * u.AU), "a=[1. 2.] AU is not a single value"),
+    (lambda: units.parse("[1,2] AU", "length", "a"), "is not a single value"),
+    (lambda: units.parse("3", "speed", "v"), "v: '3' has no unit; write a number and a unit, e.g. \"3 AU / yr\""),
+    (lambda: scenes.Kepler(a=1 * u.AU * u.rad), "a=1 AU rad has unit AU rad, which is not a length"),
+])
+def test_units_errors_name_the_argument(call, words):
+    # (numpy's bare "only 0-dimensional arrays" TypeError, a KeyError for the
+    # speed kind, and 1 AU rad taken for 1 AU: a hostile trial)
+    with pytest.raises(ValueError) as refused:
+        call()
+    assert words in str(refused.value)
+
+
+def test_a_frequency_may_still_be_given_in_radians_per_time():
+    assert units.to_scene(2 * math.pi * u.rad / u.yr, "frequency", "omega") == pytest.approx(2 * math.pi)
+
+
+def test_the_integrator_page_tool_takes_help_for_help(tmp_path, monkeypatch, capsys):
+    # (--help was taken for the output path: a 33 kB file named "--help" in the working directory)
+    from rebound_pfvi import integrator_page
+    monkeypatch.chdir(tmp_path)
+    assert integrator_page.main(["--help"]) == 0
+    assert "usage: python -m rebound_pfvi.integrator_page [PATH]" in capsys.readouterr().out
+    assert integrator_page.main([str(tmp_path / "missing" / "page.md")]) == 1
+    assert "cannot write" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
