@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import functools
 import math
+import numbers
 import os
 import time
 from dataclasses import dataclass, field
@@ -63,6 +64,13 @@ KNOB_FIELDS = {"pfvi": ("epsilon",), "ias15": ("epsilon",), "bs": ("eps_abs", "e
 
 
 @functools.lru_cache(maxsize=None)
+def _pfvi_statistics() -> Tuple[str, ...]:
+    """pfvi's read-only statistics (in its field list beside the options)."""
+    from . import _STATISTICS
+
+    return tuple(_STATISTICS)
+
+
 def family_fields(family: str) -> Tuple[str, ...]:
     """The settable fields of a family's integrator, as REBOUND lists them."""
     import rebound
@@ -89,10 +97,25 @@ class Setting:
     def __post_init__(self) -> None:
         if self.family not in FAMILIES:
             raise ValueError(f"family={self.family!r} is not an integrator family; allowed: {', '.join(FAMILIES)}")
-        if not (isinstance(self.value, (int, float)) and self.value > 0 and math.isfinite(self.value)):
+        # (a hostile trial: True was taken as epsilon 1, numpy's float32 refused,
+        # a dict of options failed to unpack naming nothing, a statistic taken for an option)
+        value = self.value
+        if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (value > 0 and math.isfinite(value)):
             raise ValueError(f"{KNOBS[self.family]}={self.value!r} for {self.family} must be a positive number")
+        object.__setattr__(self, "value", float(value) if not isinstance(value, int) else value)
+        options = self.options
+        if isinstance(options, dict):
+            options = tuple(options.items())
+        try:
+            options = tuple((name, option) for name, option in options)
+        except (TypeError, ValueError):
+            raise ValueError(f"options={self.options!r}: give (name, value) pairs, e.g. (('stages', 6),), "
+                             f"or a dict") from None
+        object.__setattr__(self, "options", options)
         fields = family_fields(self.family)
         for name, _ in self.options:
+            if self.family == "pfvi" and name in _pfvi_statistics():
+                raise ValueError(f"options: {name} is a statistic pfvi counts (read-only), not an option")
             if name in KNOB_FIELDS.get(self.family, ()):
                 raise ValueError(f"options: {name} is {self.family}'s accuracy knob, the setting's value; "
                                  f"not an option here")

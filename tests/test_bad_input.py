@@ -79,7 +79,7 @@ def test_invalid_omega_is_refused_before_frequency_fixed_reads_it(omega, stages)
     # frequency 'fixed' is chosen: a hostile trial ran to the end with NaN.)
     sim = pfvi_sim(stages)
     sim.integrator.omega = omega
-    assert_refused(sim, r"integrator\.omega = .* \(read with frequency 'fixed'\); it must be finite and >= 0")
+    assert_refused(sim, r"integrator\.omega = .* \(checked whatever the frequency; frequency 'fixed' reads it\); it must be finite and >= 0")
 
 
 @pytest.mark.parametrize("radius", [math.nan, math.inf, -1.0])

@@ -698,3 +698,18 @@ def test_a_page_without_matplotlib_links_no_figure(tmp_path, monkeypatch):
     page = (tmp_path / (scene.slug + ".md")).read_text()
     assert "png" not in paths and "![work-precision diagram]" not in page
     assert "No plot: matplotlib is not installed" in page
+
+
+def test_a_setting_checks_its_value_and_options_by_name():
+    # (a hostile trial: True ran as epsilon 1, numpy's float32 was refused, a
+    # dict of options failed to unpack naming nothing, and a statistic given
+    # as an option made every run "crashed")
+    np = pytest.importorskip("numpy")
+    with pytest.raises(ValueError, match=r"^epsilon=True for pfvi must be a positive number"):
+        compare.Setting("pfvi", True)
+    assert compare.Setting("pfvi", np.float32(1e-6)).value == pytest.approx(1e-6, rel=1e-7)
+    assert compare.Setting("pfvi", 1e-6, {"stages": 6}).options == (("stages", 6),)
+    with pytest.raises(ValueError, match=r"^options: n_steps is a statistic pfvi counts"):
+        compare.Setting("pfvi", 1e-6, (("n_steps", 3),))
+    with pytest.raises(ValueError, match=r"^options=\('stages', 6\): give \(name, value\) pairs"):
+        compare.Setting("pfvi", 1e-6, ("stages", 6))

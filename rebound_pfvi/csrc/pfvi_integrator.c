@@ -154,7 +154,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
       "origin. Not used with fitting 'none'. Type: text. Default 'partner'.",
       REB_INT, "centre", offsetof(struct pfvi_state, settings.centre), 0, 0, pfvi_centre_enum },
     PFVI_OPTION("Frequency used when frequency = 'fixed' (code units of 1/time, finite, >= 0: checked "
-        "whatever the frequency, so a bad value is refused when set, not when 'fixed' reads it). A fitted "
+        "whatever the frequency, so a bad value is refused at the next step, not when 'fixed' reads it). A fitted "
         "step far from the motion's frequency adds a repulsive force it does not show: each step with a "
         "fixed omega is checked on every particle's pull towards its centre and refused, naming the "
         "particle, where a deviation would grow. Default 0.",
@@ -736,7 +736,8 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_option
         // (Checked whatever the frequency: a value set and not yet used is
         // refused now, not when frequency 'fixed' is chosen later.)
         pfvi_error(r, "pfvi: integrator.omega = %g is not valid%s; it must be finite and >= 0.", o->omega,
-                (o->frequency == PFVI_FREQUENCY_FIXED) ? " with frequency 'fixed'" : " (read with frequency 'fixed')");
+                (o->frequency == PFVI_FREQUENCY_FIXED) ? " with frequency 'fixed'"
+                : " (checked whatever the frequency; frequency 'fixed' reads it)");
         return 0;
     }
     if (!(o->u_max > 0. && o->u_max < M_PI)){
