@@ -24,7 +24,7 @@ import math
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any, Dict, List, Optional, Tuple, cast
 
-from . import units
+from . import checks, units
 from .integrators import WHFAST_CORRECTED
 
 if TYPE_CHECKING:
@@ -496,7 +496,8 @@ class Custom(Scene):
                 raise ValueError("period: the simulation has no bound orbit; give period= explicitly")
             period = min(periods)
         self.period_value = _positive(_sim_time(period, "period", self.unit_names), "period", period)
-        self.label = str(label)
+        # (the page's file name: checked here, not after a sweep has run; a hostile trial)
+        self.label = checks.file_name(label, "label")
         self.t_start = float(sim.t)
         self._state = pickle.dumps(sim)
 

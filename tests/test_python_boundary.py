@@ -247,3 +247,9 @@ def test_the_integrator_page_tool_takes_help_for_help(tmp_path, monkeypatch, cap
     assert integrator_page.main([str(tmp_path / "missing" / "page.md")]) == 1
     assert "cannot write" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_custom_scenes_label_is_checked_when_the_scene_is_made():
+    # (it names the page's files; refused only by report.write after the whole sweep, blaming basename=)
+    with pytest.raises(ValueError, match=r"^label='runs/2026' is not a file name"):
+        scenes.Custom(_two_bodies(("AU", "yr", "Msun")), 1.0, label="runs/2026")
