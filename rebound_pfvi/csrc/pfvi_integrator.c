@@ -809,8 +809,10 @@ static int pfvi_options_valid(struct reb_simulation* r, const struct pfvi_option
         return 0;
     }
     if (r->N_var && r->gravity != REB_GRAVITY_BASIC){
+        const char* const mode = (r->gravity == REB_GRAVITY_NONE) ? "'none'" : (r->gravity == REB_GRAVITY_COMPENSATED)
+            ? "'compensated'" : (r->gravity == REB_GRAVITY_TREE) ? "'tree'" : "custom";
         pfvi_error(r, "pfvi: variational particles (N_var = %zu) need sim.gravity = 'basic', the one mode in "
-                "which REBOUND computes their forces; not supported with gravity mode %d.", r->N_var, (int)r->gravity);
+                "which REBOUND computes their forces; not supported with sim.gravity = %s.", r->N_var, mode);
         return 0;
     }
     if (r->N_var && r->force_is_velocity_dependent){
