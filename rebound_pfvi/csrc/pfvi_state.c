@@ -174,7 +174,12 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->solve_scale = pfvi_grow(st->solve_scale, N*sizeof(*st->solve_scale), &ok);
     st->output_real = pfvi_grow(st->output_real, N*sizeof(*st->output_real), &ok);
     st->output_shown = pfvi_grow(st->output_shown, N*sizeof(*st->output_shown), &ok);
-    st->output_check = pfvi_grow(st->output_check, N*sizeof(*st->output_check), &ok);
+    // (archives write output_check_N entries, which only a shown output
+    // sets: a simulation loaded with fewer particles than its last output
+    // had keeps room for them; the sanitizers caught a save reading past a
+    // buffer shrunk to N)
+    const size_t n_check = (st->output_check_N > N) ? st->output_check_N : N;
+    st->output_check = pfvi_grow(st->output_check, n_check*sizeof(*st->output_check), &ok);
     st->output_saved_N = length_after(ok, st->output_saved_N, N);
     st->predictor_length = length_after(ok, st->predictor_length, N);
     st->end_length = length_after(ok, st->end_length, N);
