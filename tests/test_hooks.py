@@ -274,6 +274,7 @@ def test_a_heartbeat_that_edits_every_step_never_sees_a_time_past_the_output():
     assert len(seen) > 100 and past == []
 
 
+@needs_python_heartbeat
 @pytest.mark.parametrize("epsilon", [0.0, 1e-10])
 def test_a_force_that_reads_an_ode_sees_its_state_at_every_step_start(epsilon):
     # REBOUND steps the ODEs after each step; a force callback reading their

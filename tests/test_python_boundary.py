@@ -9,6 +9,7 @@ import pytest
 
 from rebound_pfvi import compare, demo, paper, report, scenes, stability, units
 from rebound_pfvi.__main__ import main
+from conftest import needs_python_heartbeat
 
 #: Sweeps in which no run gets to its end: every run crashes (an overflow) or is refused (a force that is not finite).
 NOTHING_FINISHES = [
@@ -193,7 +194,8 @@ def test_a_paper_figure_without_matplotlib_writes_its_page_and_data(tmp_path, mo
     assert (tmp_path / "figure3.json").exists() and not (tmp_path / "figure3.png").exists()
 
 
-@pytest.mark.parametrize("hook", ["post_timestep_modifications", "pre_timestep_modifications", "heartbeat", "ode",
+@pytest.mark.parametrize("hook", ["post_timestep_modifications", "pre_timestep_modifications",
+                                  pytest.param("heartbeat", marks=needs_python_heartbeat), "ode",
                                   "collision_resolve", "reboundx"])
 def test_a_custom_scene_refuses_what_its_copy_would_drop(hook):
     # A copy keeps no timestep hook, heartbeat, ODE, resolve function or
