@@ -111,6 +111,19 @@ def two_body(m1, a=1.0, e=0.0, com=True, f=0.0):
     return sim
 
 
+def two_planets():
+    """A star and two planets of 1e-3 (a = 1, e = 0.3; a = 1.7, e = 0.1) under
+    pfvi at its defaults, centre of mass at rest: the hostile trials' system
+    of the output, copy and archive tests."""
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=0.3)
+    sim.add(m=1e-3, a=1.7, e=0.1)
+    sim.move_to_com()
+    sim.integrator = "pfvi"
+    return sim
+
+
 def relative_energy_error(sim, E0):
     return abs((sim.energy() - E0) / E0)
 

@@ -10,7 +10,7 @@ import pytest
 import rebound
 
 import rebound_pfvi
-from conftest import fixed_step_pfvi
+from conftest import fixed_step_pfvi, two_planets
 
 STATE = ("x", "y", "z", "vx", "vy", "vz")
 
@@ -324,14 +324,7 @@ def test_a_force_model_edited_on_a_copy_at_an_output_starts_from_the_shown_state
     # the next step only if the force model is the one it was drawn under:
     # with G changed on the copy it went on from a state drawn under the old
     # G, 9e-5 off the original given the same edit (a hostile trial).
-    def build():
-        sim = rebound.Simulation()
-        sim.add(m=1.0)
-        sim.add(m=1e-3, a=1.0, e=0.3)
-        sim.add(m=1e-3, a=1.7, e=0.1)
-        sim.move_to_com()
-        sim.integrator = "pfvi"
-        return sim
+    build = two_planets
     sim = build()
     sim.integrate(1.0)
     sim.integrate(2.0)

@@ -15,7 +15,7 @@ import pytest
 import rebound
 
 import rebound_pfvi  # noqa: F401  (registers "pfvi")
-from conftest import needs_python_heartbeat
+from conftest import needs_python_heartbeat, two_planets
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import outputs as outputs_bench  # noqa: E402
@@ -181,6 +181,69 @@ def test_a_users_dt_caps_whatever_came_before(sequence, tmp_path):
         sim.dt = u
         h = first_step(sim, lambda: sim.integrate(sim.t + 3.0))
     assert h <= u*(1 + 1e-12) + 8*np.spacing(sim.t)
+
+
+@pytest.mark.parametrize("build", [lambda: kepler(e=0.5, epsilon=1e-7), lambda: retrograde_planets(epsilon=1e-9),
+                                   lambda: two_planets()], ids=["kepler", "retrograde-planets", "two-planets"])
+@pytest.mark.parametrize("u", [0.01, 1e-4])
+def test_a_users_dt_caps_one_step_then_outputs_leave_the_run_alone(build, u):
+    # A sim.dt set once mid-run caps the step from there; once a step took it
+    # in full, REBOUND restoring that step after integrate() (its last full
+    # one) is REBOUND's, not the user's again. Before, the cap came back after
+    # every call: 200 steps at 100 outputs for one call's 5 on two planets,
+    # the run 1e-11 off.
+    runs = []
+    for outputs in (1, 7, 60):
+        sim = build()
+        sim.integrate(1.0)
+        sim.dt = u
+        h = first_step(sim, lambda: sim.integrate(1.5))
+        assert h <= u*(1 + 1e-12)
+        n = sim.integrator.n_steps
+        for k in range(1, outputs + 1):
+            sim.integrate(1.5 + 4.0*k/outputs)
+        runs.append((state(sim), sim.integrator.n_steps - n))
+    for outputs, (x, n) in zip((7, 60), runs[1:]):
+        assert x.tobytes() == runs[0][0].tobytes(), f"{outputs} outputs"
+        assert n == runs[0][1], f"{outputs} outputs"
+
+
+@pytest.mark.parametrize("u", [0.01, 0.29])
+def test_a_users_dt_set_on_a_copy_or_before_an_archive_caps_as_on_the_run(u, tmp_path):
+    # A copy made at an output, or a snapshot sim.save_to_file writes between
+    # calls or REBOUND's archive at a call's start, holds sim.dt as the user
+    # left it. Before, a loaded simulation's first call took it for REBOUND's
+    # own: a sim.dt set on a copy did not cap (1.0e-11 from the original under
+    # the same edit), and an archive's first snapshot, written just after an
+    # edit, restarted 2.7e-11 off. (A u equal to the time to the next output
+    # is REBOUND's cut there as well: docs/outputs.md.)
+    sim = two_planets()
+    sim.integrate(1.0)
+    sim.integrate(2.0)
+    other = sim.copy()
+    times = [2.0 + 0.3*k for k in range(1, 12)]
+    for s in (sim, other):
+        s.dt = u
+        for t in times:
+            s.integrate(t)
+    assert state(other).tobytes() == state(sim).tobytes()
+    path = str(tmp_path / "edited.bin")
+    sim = two_planets()
+    sim.integrate(1.0)
+    sim.integrate(1.5)
+    sim.dt = u
+    sim.save_to_file(path, interval=0.37, delete_file=True)
+    times = [1.5 + 0.3*k for k in range(1, 12)]
+    for t in times:
+        sim.integrate(t)
+    archive = rebound.Simulationarchive(path)
+    assert len(archive) > 5
+    for k in range(len(archive)):
+        restarted = archive[k]
+        for t in times:
+            if t > restarted.t:
+                restarted.integrate(t)
+        assert state(restarted).tobytes() == state(sim).tobytes(), f"snapshot {k} at t = {archive[k].t}"
 
 
 def test_a_snapshot_before_an_output_on_a_step_end_restarts_bit_identically(tmp_path):

@@ -801,6 +801,9 @@ PFVI_API int pfvi_density_of(struct reb_simulation* r, int stages, double* out);
 // pfvi (begin returns the one held before, NaN for none: end gives it back).
 PFVI_API double pfvi_request_begin(struct reb_simulation* r, double t);
 PFVI_API void pfvi_request_end(struct reb_simulation* r, double held);
+// The options as the next step checks them: 1 valid, 0 refused (pfvi's
+// error among REBOUND's messages), -1 not pfvi.
+PFVI_API int pfvi_options_check(struct reb_simulation* r);
 
 /* ------------------------------------------------ geometry (centre) */
 
@@ -1036,6 +1039,9 @@ struct pfvi_replay {
 // took Kepler e = 0.91 from 7.4e-14 AU back to 2.9e-11; docs/step-control.md).
 #define PFVI_REPLAY_PIN_EVERY 16
 #define PFVI_REPLAY_PIN_DRIFT 1e-5
+
+// Whether a snapshot was written inside an integrate() (struct pfvi_state's in_call).
+enum { PFVI_CALL_UNKNOWN = 0, PFVI_CALL_INSIDE = 1, PFVI_CALL_BETWEEN = 2, PFVI_CALL_STARTING = 3 };
 
 // Integrator state: settings, statistics and the controller's state are
 // REBOUND fields (saved in archives); the scratch grows only with N.
@@ -1323,6 +1329,19 @@ struct pfvi_state {
     // call's first step was that cut (pfvi_request_end puts the run's value back).
     double request_dt_last_done;
     int request_loaded_cut;
+    // Whether an integrate() is running (PFVI_CALL_INSIDE; before its first
+    // step, PFVI_CALL_STARTING) or not (PFVI_CALL_BETWEEN), saved: a
+    // snapshot says whether it was written inside a call, as REBOUND's
+    // archive writes them, or between calls, as a copy or sim.save_to_file
+    // (PFVI_CALL_UNKNOWN: an archive written before 2026-11-29, or no
+    // integrate() yet). snapshot_between_calls: this call's simulation was
+    // loaded or copied from a snapshot written between calls or at a call's
+    // start (REBOUND's first archive heartbeat, unless it cut sim.dt to
+    // finish), whose sim.dt is the simulation's as the user left it: judged
+    // as the run judged it (a value set after the copy caps; before, it was
+    // taken for the snapshot's and a copy went 1e-11 from its original).
+    int in_call;
+    int snapshot_between_calls;
     // The sim.dt REBOUND leaves after an integrate() that ended on an output
     // (its last full step: the dt_last_done before the finishing step, or
     // the dt the call started with), so that a sim.dt the user sets after
@@ -1359,9 +1378,13 @@ struct pfvi_state {
     int call_is_integrate;   // this step's call found dt_last_done zero (integrate() begins so)
     // The last sim.dt a step found that was neither pfvi's nor REBOUND's: the
     // user's value. Never taken for REBOUND's restoring, even where REBOUND
-    // restores it (the user's cap stands) or the step it capped is REBOUND's
-    // last full one.
+    // restores it (the user's cap stands).
     double dt_user;
+    // A step took dt_user in full: where REBOUND then restores it as the
+    // call's last full step, pfvi_request_end leaves the run's proposal as
+    // sim.dt instead, so that the next call tells a cap set again from one
+    // REBOUND put back.
+    int dt_user_spent;
     // Where the first call after a load or copy had its first step as its
     // last (REBOUND cut sim.dt to finish before pfvi saw the snapshot's),
     // that cut: a snapshot written as REBOUND finished on an output holds

@@ -424,6 +424,8 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_INT, "dt_call_default", offsetof(struct pfvi_state, dt_call_default), 0, 0, 0 },
     { "", REB_INT, "dt_call_first_cut", offsetof(struct pfvi_state, dt_call_first_cut), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_user", offsetof(struct pfvi_state, dt_user), 0, 0, 0 },
+    { "", REB_INT, "dt_user_spent", offsetof(struct pfvi_state, dt_user_spent), 0, 0, 0 },
+    { "", REB_INT, "in_call", offsetof(struct pfvi_state, in_call), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_call_cut", offsetof(struct pfvi_state, dt_call_cut), 0, 0, 0 },
     { "", REB_INT, "last_finishing", offsetof(struct pfvi_state, last_finishing), 0, 0, 0 },
     { "", REB_INT, "predictor_stages", offsetof(struct pfvi_state, predictor_stages), 0, 0, 0 },
@@ -1191,10 +1193,12 @@ static int rebound_restored_at_end(const struct reb_simulation* r, const struct 
 }
 
 // A sim.dt the user set since the last call: one REBOUND could not have
-// restored. (Not on a finishing step, whose sim.dt REBOUND cut; nor on a
-// loaded or copied simulation's first call, whose sim.dt is the snapshot's.)
+// restored. (Not on a finishing step, whose sim.dt REBOUND cut; nor on the
+// first call of a simulation loaded from a snapshot REBOUND wrote during a
+// call, whose sim.dt is REBOUND's working value there.)
 static int user_set_dt(const struct reb_simulation* r, const struct pfvi_state* st, const struct pfvi_call* c){
-    return !c->finishing && st->end_N != 0 && rebound_restore_known(st) && !rebound_restored(r, st, 0);
+    return !c->finishing && (st->end_N != 0 || st->snapshot_between_calls) && rebound_restore_known(st)
+        && !rebound_restored(r, st, 0);
 }
 
 // A call that would pass integrate()'s requested time finishes on it.
@@ -1608,6 +1612,7 @@ static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
         return;
     }
     st->in_step = PFVI_STEP_RUNNING;
+    st->in_call = (st->in_call == PFVI_CALL_STARTING) ? PFVI_CALL_INSIDE : st->in_call;
     st->reentry_refused = 0;
     st->request_shown = 0;
     st->status_at_start = (int)r->status;
@@ -1646,16 +1651,22 @@ static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
     const int began_restored_own = !began_proposed && !began_default && rebound_restored(r, st, 0);
     const int began_restored_default = !began_proposed && !began_default && !began_restored_own
         && rebound_restored(r, st, 1);
-    if (!finishing && !loaded && r->dt != 0. && !(began_proposed || began_default || began_restored_own
+    if (!finishing && (!loaded || st->snapshot_between_calls) && r->dt != 0. && !(began_proposed || began_default || began_restored_own
             || began_restored_default)){
         st->dt_user = fabs(r->dt);
+        st->dt_user_spent = 0;
     }
     // (REBOUND cut from what it synchronized with: at least the cut, the same way.)
     const int cut_from_known = st->dt_at_sync*st->dt_at_start > 0. && fabs(st->dt_at_sync) >= fabs(st->dt_at_start);
     st->dt_first_uncut = (call_start && finishing && fresh && cut_from_known) ? st->dt_at_sync : 0.;
     pfvi_step_model_keep(r, st);
+    const uint64_t steps_before = st->statistics.n_steps;
     pfvi_step_take(r, st);
     st->dt_first_uncut = 0.;
+    if (!finishing && st->statistics.n_steps != steps_before && st->dt_user != 0.
+            && fabs(st->dt_at_start) == st->dt_user && fabs(r->dt_last_done) == st->dt_user){
+        st->dt_user_spent = 1;
+    }
     if (call_start && !finishing){
         const int own = began_proposed || began_restored_own;
         const int by_default = !own && (began_default || began_restored_default);
@@ -1788,6 +1799,14 @@ static struct pfvi_state* pfvi_state_of(struct reb_simulation* r){
     return (r->integrator.callbacks.step == pfvi_step) ? r->integrator.state : NULL;
 }
 
+// The options as the next step checks them, before any step (compare's
+// settings check theirs when made): 1 valid; 0 with pfvi's error among
+// REBOUND's messages; -1 if the integrator is not pfvi.
+int pfvi_options_check(struct reb_simulation* r){
+    struct pfvi_state* const st = pfvi_state_of(r);
+    return st ? pfvi_options_valid(r, &st->settings) : -1;
+}
+
 double pfvi_request_begin(struct reb_simulation* r, double t){
     struct pfvi_state* const st = pfvi_state_of(r);
     if (!st){
@@ -1795,6 +1814,9 @@ double pfvi_request_begin(struct reb_simulation* r, double t){
     }
     // (an enclosing call's, returned to be given back: a callback's integrate() is refused)
     const double held = st->request_set ? st->request_t : NAN;
+    st->snapshot_between_calls = !st->request_set && st->end_N == 0 && st->dt_proposed != 0.
+        && (st->in_call == PFVI_CALL_BETWEEN || (st->in_call == PFVI_CALL_STARTING && r->status != REB_STATUS_LAST_STEP));
+    st->in_call = PFVI_CALL_STARTING;
     st->request_set = 1;
     st->request_t = t;
     st->request_dt_leaves = 0.;
@@ -1822,10 +1844,24 @@ void pfvi_request_end(struct reb_simulation* r, double held){
         // snapshots off, 1.6e-2: a hostile trial).
         r->dt = copysign(st->request_dt_last_done, r->dt);
     }
+    if (st->request_set && r->exact_finish_time == 1 && st->in_step == PFVI_STEP_IDLE && st->dt_user_spent
+            && fabs(r->dt) == st->dt_user && st->dt_proposed != 0. && fabs(st->dt_proposed) != st->dt_user){
+        // REBOUND restored a user's cap that a step took in full (the call's
+        // last full step): left as it is, the next call could not tell it
+        // from the user setting it again, and either every later call's
+        // first step was capped (200 steps at 100 outputs for one call's 5,
+        // the run 1e-11 off) or a user's sim.dt before each call was not. The
+        // run's proposal stands instead, pfvi's own: what a run that the cap
+        // did not end on leaves.
+        r->dt = copysign(st->dt_proposed, r->dt);
+        st->dt_rebound_leaves = r->dt;
+    }
     st->request_loaded_cut = 0;
     st->request_dt_leaves = 0.;
     st->request_set = !isnan(held);
     st->request_t = st->request_set ? held : 0.;
+    st->in_call = st->request_set ? PFVI_CALL_INSIDE : PFVI_CALL_BETWEEN;
+    st->snapshot_between_calls = st->snapshot_between_calls && st->request_set;
 }
 
 const char* pfvi_rebound_version_compiled(void){
