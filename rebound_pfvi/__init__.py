@@ -209,6 +209,11 @@ def _refuse_integers_that_wrap():
                                  f"({low} to {high}); not set")
         if self.name != INTEGRATOR_NAME.encode():
             return generic(self, name, value)
+        if _is_bool(value):
+            # (ctypes stored True as 1: stages = True ran on as s = 1 and
+            # was refused only at the next step)
+            raise TypeError(f"integrator.{name} = {value!r} is a bool; it takes {_FIELD_KINDS.get(name, 'a number')}; "
+                            f"not set")
         try:
             generic(self, name, value)
         except TypeError as error:
@@ -224,6 +229,13 @@ def _refuse_integers_that_wrap():
 
 
 _refuse_integers_that_wrap()
+
+
+def _is_bool(value: Any) -> bool:
+    """Python's bool or numpy's (told by its type's name: numpy is not
+    imported for it, and may be half imported in another thread)."""
+    kind = type(value)
+    return isinstance(value, bool) or (kind.__module__ == "numpy" and kind.__name__ in ("bool_", "bool"))
 
 
 def _is_nan(value: Any) -> bool:
@@ -282,6 +294,26 @@ def _check_stages(s):
     return int(s)
 
 
+def _real(name: str, value: Any, at_least: Any = None, above: Any = None, below: Any = None) -> float:
+    """value as a float, refused by name where it is not a finite real number
+    (the inspection functions returned NaN for NaN, and a limited omega of
+    10 for omega = NaN) or lies below at_least, at or below above, or at or
+    above below."""
+    if isinstance(value, bool):
+        raise TypeError(f"{name}={value!r} is a bool; it takes a real number")
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}={value!r} is not a real number") from None
+    if (not _math.isfinite(x) or (at_least is not None and x < at_least) or (above is not None and not x > above)
+            or (below is not None and not x < below)):
+        bounds = "".join(((f" and >= {at_least}" if at_least is not None else ""),
+                          (f" and > {above}" if above is not None else ""),
+                          (f" and < {below}" if below is not None else "")))
+        raise ValueError(f"{name}={value!r} is not valid; it must be finite{bounds}")
+    return x
+
+
 def seed_coefficients(u: float, c: float) -> Tuple[float, ...]:
     """The seed's fitted interpolation coefficients (b, bbar, B, Bbar) at node c.
 
@@ -289,14 +321,14 @@ def seed_coefficients(u: float, c: float) -> Tuple[float, ...]:
     u = omega h (seed section 3). At u = 0 they are the linear limits.
     """
     out = (_ctypes.c_double * 4)()
-    _lib.pfvi_seed_coefficients(float(u), float(c), out)
+    _lib.pfvi_seed_coefficients(_real("u", u), _real("c", c), out)
     return tuple(out)
 
 
 def gamma(u: float) -> float:
     """gamma(u) = u cot(u): the factor by which the printed two-point Ld scales
     the exact discrete Lagrangian of the oscillator, and its momenta."""
-    return _lib.pfvi_gamma(float(u))
+    return _lib.pfvi_gamma(_real("u", u))
 
 
 def two_point_coefficients(omega: float, h: float, u_max: float = 1.0, fitting: str = "phase") -> Dict[str, Any]:
@@ -308,9 +340,11 @@ def two_point_coefficients(omega: float, h: float, u_max: float = 1.0, fitting: 
     """
     if fitting not in FITTINGS:
         raise ValueError(f"fitting={fitting!r} is not valid; allowed: {', '.join(FITTINGS)}")
-    omega = 0.0 if fitting == "none" else float(omega)
+    omega = 0.0 if fitting == "none" else _real("omega", omega, at_least=0.0)
+    h = _real("h", h)
+    u_max = _real("u_max", u_max, above=0.0, below=_math.pi)
     out = (_ctypes.c_double * 6)()
-    status = _lib.pfvi_two_point_coefficients(omega, float(h), float(u_max),
+    status = _lib.pfvi_two_point_coefficients(omega, h, u_max,
                                               int(fitting == "phase-literal"), out)
     if status < 0:
         raise ValueError(f"omega*h = {omega * h!r} lies at a pole of the two-point coefficients")
@@ -366,7 +400,7 @@ def stage_coefficients(s: int, u: float) -> Dict[str, Any]:
 
     s = _check_stages(s)
     out = (_ctypes.c_double * (2 + 6 * s))()
-    _lib.pfvi_stage_coefficients(s, float(u), out)
+    _lib.pfvi_stage_coefficients(s, _real("u", u), out)
     values = np.array(out)
     result: Dict[str, Any] = {"gamma": float(values[0]), "det_ratio": float(values[1])}
     for k, name in enumerate(("b", "bbar", "B", "Bbar", "beta_m", "beta_d")):
@@ -388,5 +422,5 @@ def stage_differentiation(s: int, u: float, fitting: str = "exact") -> Any:
     if fitting not in FITTINGS:
         raise ValueError(f"fitting={fitting!r} is not valid; allowed: {', '.join(FITTINGS)}")
     out = (_ctypes.c_double * (s * s))()
-    _lib.pfvi_stage_differentiation(s, float(u), FITTINGS.index(fitting), out)
+    _lib.pfvi_stage_differentiation(s, _real("u", u), FITTINGS.index(fitting), out)
     return np.array(out).reshape(s, s)

@@ -82,6 +82,28 @@ def family_fields(family: str) -> Tuple[str, ...]:
     return tuple(sorted(integrator_fields(sim)))
 
 
+def _check_option_values(family: str, options: Tuple[Tuple[str, Any], ...]) -> None:
+    """Each option set on a new simulation of the family, and pfvi's checked as
+    its next step would check them, so that a bad value is refused when the
+    setting is made, naming it, not as a failed row of the sweep."""
+    import ctypes
+
+    import rebound
+
+    from . import _lib
+
+    sim = rebound.Simulation()
+    try:
+        configure_integrator(sim, family, **dict(options))
+    except (TypeError, ValueError, AttributeError, OverflowError) as error:
+        raise ValueError(f"options: {error}") from None
+    if family == "pfvi" and _lib.pfvi_options_check(ctypes.addressof(sim)) == 0:
+        try:
+            sim.process_messages()
+        except RuntimeError as error:
+            raise ValueError(f"options: {error}") from None
+
+
 @dataclass(frozen=True)
 class Setting:
     """One run of a sweep: `family` with `options`, at knob value `value`."""
@@ -122,6 +144,7 @@ class Setting:
             if name not in fields:
                 raise ValueError(f"options: {name!r} is not an option of {self.family}; it has: "
                                  f"{', '.join(sorted(fields))}")
+        _check_option_values(self.family, self.options)
         if not self.line:
             if self.family == "pfvi":
                 label = pfvi_label(dict(self.options))

@@ -88,7 +88,13 @@ def configure(sim: rebound.Simulation, family: str, dt: float | None = None, **o
     for name, value in options.items():
         if name not in fields:
             raise ValueError(f"{name}={value!r} is not an option of {family}; it has: {', '.join(sorted(fields))}")
-        setattr(sim.integrator, name, value)
+        try:
+            setattr(sim.integrator, name, value)
+        except (TypeError, ValueError) as error:
+            if f"integrator.{name}" in str(error):
+                raise
+            # (REBOUND's own say only "must be real number, not str")
+            raise type(error)(f"integrator.{name} = {value!r} for {family}: {error}") from None
     if dt is not None:
         sim.dt = dt
     return sim

@@ -4,6 +4,7 @@ import re
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 import rebound
 
@@ -153,6 +154,22 @@ def test_non_finite_force_rolls_back(stages):
     assert_refused(sim, r"force on particle 2 is not finite")
 
 
+@pytest.mark.parametrize("call, words", [
+    (lambda: rebound_pfvi.two_point_coefficients(math.nan, 0.1), "omega=nan"),
+    (lambda: rebound_pfvi.two_point_coefficients(-1.0, 0.1), "omega=-1.0"),
+    (lambda: rebound_pfvi.two_point_coefficients(1.0, math.inf), "h=inf"),
+    (lambda: rebound_pfvi.two_point_coefficients(1.0, 0.1, u_max=0.0), "u_max=0.0"),
+    (lambda: rebound_pfvi.two_point_coefficients(1.0, 0.1, u_max=math.nan), "u_max=nan"),
+    (lambda: rebound_pfvi.gamma(math.nan), "u=nan"),
+    (lambda: rebound_pfvi.seed_coefficients(0.5, math.inf), "c=inf"),
+    (lambda: rebound_pfvi.stage_coefficients(4, math.nan), "u=nan"),
+    (lambda: rebound_pfvi.stage_differentiation(4, -math.inf), "u=-inf")])
+def test_the_inspection_functions_refuse_a_value_that_is_not_finite(call, words):
+    # (before: NaN out for NaN in, and omega = NaN came back limited to 10)
+    with pytest.raises(ValueError, match=re.escape(words)):
+        call()
+
+
 def test_pole_of_the_two_point_coefficients_is_refused():
     sim = pfvi_sim()
     sim.integrator.frequency = "fixed"
@@ -269,12 +286,15 @@ def test_unknown_field_and_wrong_types_raise_in_python():
 
 
 @pytest.mark.parametrize("field, value", [("stages", 2.5), ("stages", "8"), ("epsilon", None),
-                                          ("omega", [1.0]), ("u_max", "1")])
+                                          ("omega", [1.0]), ("u_max", "1"), ("stages", True),
+                                          ("epsilon", np.True_), ("fitting", False)])
 def test_a_value_of_the_wrong_type_names_the_field_and_sets_nothing(field, value):
     sim = pfvi_sim()
     sim.integrator.stages = 6
     before = {name: getattr(sim.integrator, name) for name in rebound_pfvi.DEFAULTS}
-    with pytest.raises(TypeError, match=rf"integrator\.{field} = .* has the wrong type; it takes "):
+    # (a bool: ctypes stored True as 1, stages = True ran on as s = 1 until
+    # the next step refused it)
+    with pytest.raises(TypeError, match=rf"integrator\.{field} = .* (has the wrong type|is a bool); it takes "):
         setattr(sim.integrator, field, value)
     assert {name: getattr(sim.integrator, name) for name in rebound_pfvi.DEFAULTS} == before
 

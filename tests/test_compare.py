@@ -379,6 +379,13 @@ def test_scene_errors_name_the_parameter():
                         (lambda: scenes.make("moon"), ("moon", "kepler")),
                         (lambda: compare.Setting("rk4", 1.0), ("rk4", "ias15")),
                         (lambda: compare.Setting("ias15", -1.0), ("epsilon=-1.0",)),
+                        # option values, checked when the setting is made (before: a
+                        # refused or crashed row of the sweep)
+                        (lambda: compare.Setting("pfvi", 1e-6, (("stages", 9),)), ("integrator.stages = 9", "2 to 8")),
+                        (lambda: compare.Setting("pfvi", 1e-6, (("stages", True),)), ("integrator.stages = True",)),
+                        (lambda: compare.Setting("pfvi", 1e-6, (("u_max", 4.0),)), ("integrator.u_max = 4",)),
+                        (lambda: compare.Setting("pfvi", 1e-6, (("fitting", "bogus"),)), ("fitting", "bogus")),
+                        (lambda: compare.Setting("ias15", 1e-6, (("min_dt", "x"),)), ("integrator.min_dt = 'x'",)),
                         (lambda: compare.default_settings(scenes.Kepler(), "huge"), ("size='huge'",))):
         with pytest.raises(ValueError) as error:
             make()
