@@ -289,9 +289,14 @@ _tell_the_requested_time()
 
 
 def _check_stages(s):
-    if s not in STAGES:
+    # (an integer of any kind; 3.0 and True were taken for 3 and 1)
+    try:
+        index = None if _is_bool(s) else _operator.index(s)
+    except TypeError:
+        index = None
+    if index not in STAGES:
         raise ValueError(f"s={s!r} is not valid; allowed: {', '.join(map(str, STAGES))}")
-    return int(s)
+    return index
 
 
 def _real(name: str, value: Any, at_least: Any = None, above: Any = None, below: Any = None) -> float:
@@ -314,6 +319,13 @@ def _real(name: str, value: Any, at_least: Any = None, above: Any = None, below:
     return x
 
 
+def _finite_out(values: Any, what: str) -> None:
+    """Refuses a result that overflowed (u near the largest double: 1e308 gave
+    inf and NaN back without a word)."""
+    if not all(_math.isfinite(x) for x in values):
+        raise ValueError(f"{what}: the result overflows (not finite)")
+
+
 def seed_coefficients(u: float, c: float) -> Tuple[float, ...]:
     """The seed's fitted interpolation coefficients (b, bbar, B, Bbar) at node c.
 
@@ -322,13 +334,16 @@ def seed_coefficients(u: float, c: float) -> Tuple[float, ...]:
     """
     out = (_ctypes.c_double * 4)()
     _lib.pfvi_seed_coefficients(_real("u", u), _real("c", c), out)
+    _finite_out(out, f"seed_coefficients(u={u!r}, c={c!r})")
     return tuple(out)
 
 
 def gamma(u: float) -> float:
     """gamma(u) = u cot(u): the factor by which the printed two-point Ld scales
     the exact discrete Lagrangian of the oscillator, and its momenta."""
-    return _lib.pfvi_gamma(_real("u", u))
+    value = _lib.pfvi_gamma(_real("u", u))
+    _finite_out((value,), f"gamma(u={u!r})")
+    return value
 
 
 def two_point_coefficients(omega: float, h: float, u_max: float = 1.0, fitting: str = "phase") -> Dict[str, Any]:
@@ -349,6 +364,7 @@ def two_point_coefficients(omega: float, h: float, u_max: float = 1.0, fitting: 
     if status < 0:
         raise ValueError(f"omega*h = {omega * h!r} lies at a pole of the two-point coefficients")
     keys = ("omega", "cos_u", "h_sinc_u", "omega_sin_u", "half_kick", "gamma")
+    _finite_out(out, f"two_point_coefficients(omega={omega!r}, h={h!r})")
     result: Dict[str, Any] = dict(zip(keys, out))
     result["limited"] = bool(status == 1)
     return result
@@ -401,6 +417,7 @@ def stage_coefficients(s: int, u: float) -> Dict[str, Any]:
     s = _check_stages(s)
     out = (_ctypes.c_double * (2 + 6 * s))()
     _lib.pfvi_stage_coefficients(s, _real("u", u), out)
+    _finite_out(out, f"stage_coefficients(s={s}, u={u!r})")
     values = np.array(out)
     result: Dict[str, Any] = {"gamma": float(values[0]), "det_ratio": float(values[1])}
     for k, name in enumerate(("b", "bbar", "B", "Bbar", "beta_m", "beta_d")):
@@ -423,4 +440,5 @@ def stage_differentiation(s: int, u: float, fitting: str = "exact") -> Any:
         raise ValueError(f"fitting={fitting!r} is not valid; allowed: {', '.join(FITTINGS)}")
     out = (_ctypes.c_double * (s * s))()
     _lib.pfvi_stage_differentiation(s, _real("u", u), FITTINGS.index(fitting), out)
+    _finite_out(out, f"stage_differentiation(s={s}, u={u!r})")
     return np.array(out).reshape(s, s)

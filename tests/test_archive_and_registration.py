@@ -384,3 +384,58 @@ def test_an_archive_begun_after_an_output_opens_and_every_snapshot_continues_the
     """
     out = run_python(code)
     assert out.returncode == 0 and out.stdout.startswith("ok"), (out.returncode, out.stdout, out.stderr[-2000:])
+
+
+def four_bodies():
+    sim = two_planets()
+    sim.add(m=0.0, a=2.4, e=0.6)
+    sim.move_to_com()
+    return sim
+
+
+def damping(simp):
+    s = simp.contents
+    for p in s.particles[1:s.N]:
+        p.vx *= 1.0 - 1e-5*s.dt_last_done
+        p.vy *= 1.0 - 1e-5*s.dt_last_done
+
+
+@pytest.mark.parametrize("case", ["reversible-s3", "reversible-s8", "backward-with-hook"])
+def test_interval_snapshots_between_two_finishing_steps_restart_bit_identically(tmp_path, case):
+    # An interval archive written during outputs: where the step control cut
+    # a finishing step short of the time, REBOUND cut again without a new last
+    # full step, and restores the step before the first after the call; a
+    # snapshot written between the two began its restart on the cut and kept
+    # it (a hostile trial: 'reversible' s = 3, 3.5e-10 off; backwards with a
+    # post-timestep hook, 2e-16).
+    path = str(tmp_path / "run.bin")
+
+    def build():
+        sim = four_bodies()
+        if case.startswith("reversible"):
+            sim.integrator.step_control = "reversible"
+            sim.integrator.stages = int(case[-1])
+        else:
+            sim.post_timestep_modifications = damping
+        return sim
+
+    sim = build()
+    if case.startswith("reversible"):
+        times = [0.37*j for j in range(1, 14)]
+    else:
+        sim.integrate(6.0)
+        times = [6.0 - 0.37*j for j in range(1, 14)]
+    sim.save_to_file(path, interval=0.29, delete_file=True)
+    for t in times:
+        sim.integrate(t)
+    final = [p.xyz + p.vxyz for p in sim.particles]
+    archive = rebound.Simulationarchive(path)
+    assert len(archive) >= 15
+    for k in range(len(archive)):
+        again = archive[k]
+        if not case.startswith("reversible"):
+            again.post_timestep_modifications = damping
+        for t in times:
+            if (t - again.t)*(times[-1] - times[0]) > 0:
+                again.integrate(t)
+        assert [p.xyz + p.vxyz for p in again.particles] == final, f"snapshot {k} at t = {archive[k].t}"

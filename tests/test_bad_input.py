@@ -163,7 +163,11 @@ def test_non_finite_force_rolls_back(stages):
     (lambda: rebound_pfvi.gamma(math.nan), "u=nan"),
     (lambda: rebound_pfvi.seed_coefficients(0.5, math.inf), "c=inf"),
     (lambda: rebound_pfvi.stage_coefficients(4, math.nan), "u=nan"),
-    (lambda: rebound_pfvi.stage_differentiation(4, -math.inf), "u=-inf")])
+    (lambda: rebound_pfvi.stage_differentiation(4, -math.inf), "u=-inf"),
+    (lambda: rebound_pfvi.gamma(1e308), "overflows"),
+    (lambda: rebound_pfvi.stage_coefficients(3, 1e308), "overflows"),
+    (lambda: rebound_pfvi.stage_coefficients(3.0, 0.1), "s=3.0"),
+    (lambda: rebound_pfvi.lobatto(True), "s=True")])
 def test_the_inspection_functions_refuse_a_value_that_is_not_finite(call, words):
     # (before: NaN out for NaN in, and omega = NaN came back limited to 10)
     with pytest.raises(ValueError, match=re.escape(words)):

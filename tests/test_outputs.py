@@ -208,6 +208,54 @@ def test_a_users_dt_caps_one_step_then_outputs_leave_the_run_alone(build, u):
         assert n == runs[0][1], f"{outputs} outputs"
 
 
+@pytest.mark.parametrize("build", [lambda: kepler(e=0.6), two_planets], ids=["kepler", "two-planets"])
+@pytest.mark.parametrize("u", [0.1, 0.15, 0.3, 1.0])
+def test_a_users_dt_at_least_the_time_to_the_next_output_caps_as_in_one_call(build, u):
+    # REBOUND cuts such a sim.dt to finish on the next output, so pfvi saw
+    # only the cut and showed the output from the run's own step past it: the
+    # user's value capped a single call's first step but not the outputs' (a
+    # hostile trial: 7 steps against 5, 9.0e-10 apart on Kepler at u = 0.3).
+    # It now caps the step from the output, shown from there.
+    runs = []
+    for times in ([4.0], [1.0 + 0.1*k for k in range(1, 31)]):
+        sim = build()
+        sim.integrate(1.0)
+        sim.dt = u
+        n = sim.integrator.n_steps
+        for t in times:
+            sim.integrate(t)
+        runs.append((state(sim), sim.integrator.n_steps - n))
+    assert runs[1][0].tobytes() == runs[0][0].tobytes()
+    assert runs[1][1] == runs[0][1]
+
+
+@pytest.mark.parametrize("call", ["steps", "integrate"])
+@pytest.mark.parametrize("u", [0.01, -0.1])
+def test_a_copy_made_after_steps_or_edited_before_steps_judges_dt_as_the_original(call, u, tmp_path):
+    # sim.steps() runs no integrate(): a copy made after it, or a copy or load
+    # at an output stepped with steps() after an edit, took the user's sim.dt
+    # for the snapshot's (first step 0.69 where the original's was 0.01; a
+    # copy ending at t = 0 where its original went to 0.18; a hostile trial).
+    for before in ("steps", "output"):
+        sim = kepler(e=0.6)
+        if before == "steps":
+            sim.steps(2)
+        else:
+            sim.integrate(0.28493343604320753)
+        copies = [sim.copy()]
+        path = str(tmp_path / f"{before}.bin")
+        sim.save_to_file(path, delete_file=True)
+        copies.append(rebound.Simulation(path))
+        for s in [sim] + copies:
+            s.dt = u
+            if call == "steps":
+                s.steps(2)
+            else:
+                s.integrate(s.t + 5*u)
+        for s in copies:
+            assert s.t == sim.t and state(s).tobytes() == state(sim).tobytes(), before
+
+
 @pytest.mark.parametrize("u", [0.01, 0.29])
 def test_a_users_dt_set_on_a_copy_or_before_an_archive_caps_as_on_the_run(u, tmp_path):
     # A copy made at an output, or a snapshot sim.save_to_file writes between

@@ -205,6 +205,24 @@ def test_megno_of_a_regular_system(t0):
     assert abs(sim.lyapunov()) < 1e-3
 
 
+def test_megno_stays_finite_through_its_initial_time_on_the_way_back():
+    # REBOUND's update divides by the time since MEGNO began; pfvi's
+    # symmetric steps land back on that time exactly, where it was 0/0 and
+    # MEGNO NaN for good after (a hostile trial; IAS15 passes the instant).
+    sim = rebound.Simulation()
+    sim.add(m=1.0)
+    sim.add(m=1e-3, a=1.0, e=0.3)
+    sim.add(m=1e-3, a=1.7, e=0.1)
+    sim.move_to_com()
+    sim.integrator = "pfvi"
+    sim.init_megno(seed=1)
+    sim.integrate(0.285)
+    sim.integrate(-0.5)
+    landed = sim.integrator.n_steps
+    sim.integrate(2.0)
+    assert landed > 0 and np.isfinite(sim.megno()) and np.isfinite(sim.lyapunov())
+
+
 def test_megno_of_a_chaotic_system():
     # REBOUND's test_megno.py, test_chaotic, with pfvi in place of IAS15 (at
     # its default, 1e-9), at epsilon 1e-8. MEGNO at t = 1000 of this chaotic

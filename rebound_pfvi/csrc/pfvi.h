@@ -1329,6 +1329,22 @@ struct pfvi_state {
     // call's first step was that cut (pfvi_request_end puts the run's value back).
     double request_dt_last_done;
     int request_loaded_cut;
+    // What pfvi_request_end puts back for request_loaded_cut: the
+    // dt_last_done above, or, for a snapshot written between two finishing
+    // steps of a call (request_began_last_step: the step control cut the
+    // first short of the time, and REBOUND cut again without a new last full
+    // step), the step before the first, which the run kept as
+    // dt_rebound_leaves (before, a 'reversible' restart there went 3.5e-10
+    // from the run).
+    double request_dt_restore;
+    int request_began_last_step;
+    // sim.dt as the running integrate() found it (saved: a snapshot REBOUND
+    // wrote at a call's start after cutting sim.dt to finish holds the cut,
+    // and REBOUND restores this value after the call). request_entry_cut: a
+    // simulation loaded from such a snapshot: that value, which
+    // pfvi_request_end puts back as the run's REBOUND did; else 0.
+    double dt_call_entry;
+    double request_entry_cut;
     // Whether an integrate() is running (PFVI_CALL_INSIDE; before its first
     // step, PFVI_CALL_STARTING) or not (PFVI_CALL_BETWEEN), saved: a
     // snapshot says whether it was written inside a call, as REBOUND's

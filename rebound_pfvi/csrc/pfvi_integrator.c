@@ -426,6 +426,7 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_DOUBLE, "dt_user", offsetof(struct pfvi_state, dt_user), 0, 0, 0 },
     { "", REB_INT, "dt_user_spent", offsetof(struct pfvi_state, dt_user_spent), 0, 0, 0 },
     { "", REB_INT, "in_call", offsetof(struct pfvi_state, in_call), 0, 0, 0 },
+    { "", REB_DOUBLE, "dt_call_entry", offsetof(struct pfvi_state, dt_call_entry), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_call_cut", offsetof(struct pfvi_state, dt_call_cut), 0, 0, 0 },
     { "", REB_INT, "last_finishing", offsetof(struct pfvi_state, last_finishing), 0, 0, 0 },
     { "", REB_INT, "predictor_stages", offsetof(struct pfvi_state, predictor_stages), 0, 0, 0 },
@@ -1129,6 +1130,7 @@ struct pfvi_call {
     double density_sigma, density_dlog;
     uint64_t contact_steps; // n_contact_steps before the step
     double h;               // the step taken
+    double user_cap;        // a user's sim.dt REBOUND cut to finish (user_cap_cut): it caps the step
     int unwrapped;          // the run's end, which REBOUND's periodic wrap had moved, put back
 };
 
@@ -1173,8 +1175,7 @@ static double output_near(const struct pfvi_state* st, double t, double step){
 // Whether sim.dt is a value REBOUND restores after integrate() from one of
 // pfvi's own (pfvi_step), not one the user set; at_end: the simulation is
 // still the run's last step's end, unedited.
-static int rebound_restored(const struct reb_simulation* r, const struct pfvi_state* st, int at_end){
-    const double dt = fabs(r->dt);
+static int rebound_restored_value(const struct pfvi_state* st, double dt, int at_end){
     if (dt == st->dt_user){
         return 0;
     }
@@ -1182,6 +1183,10 @@ static int rebound_restored(const struct reb_simulation* r, const struct pfvi_st
         || (st->dt_call_began != 0. && dt == fabs(st->dt_call_began)
             && (!st->dt_call_default || ((at_end || st->dt_call_first_cut) && st->call_is_integrate)))
         || (st->dt_call_cut != 0. && dt == fabs(st->dt_call_cut));
+}
+
+static int rebound_restored(const struct reb_simulation* r, const struct pfvi_state* st, int at_end){
+    return rebound_restored_value(st, fabs(r->dt), at_end);
 }
 
 static int rebound_restore_known(const struct pfvi_state* st){
@@ -1199,6 +1204,19 @@ static int rebound_restored_at_end(const struct reb_simulation* r, const struct 
 static int user_set_dt(const struct reb_simulation* r, const struct pfvi_state* st, const struct pfvi_call* c){
     return !c->finishing && (st->end_N != 0 || st->snapshot_between_calls) && rebound_restore_known(st)
         && !rebound_restored(r, st, 0);
+}
+
+// The same on an integrate() whose first step REBOUND cut to finish on its
+// time (the user's sim.dt at least the time to it): the value the call
+// began with (dt_call_entry), which caps the step from the output as it
+// would in a call to a later time; 0 if it is not the user's.
+static double user_cap_cut(const struct pfvi_state* st, const struct pfvi_call* c){
+    const double entry = fabs(st->dt_call_entry);
+    const int user = c->finishing && st->call_is_integrate && st->request_set && entry != 0.
+        && entry != fabs(st->dt_proposed)
+        && (st->end_N != 0 || st->snapshot_between_calls || st->request_entry_cut != 0.)
+        && rebound_restore_known(st) && !rebound_restored_value(st, entry, 0);
+    return user ? entry : 0.;
 }
 
 // A call that would pass integrate()'s requested time finishes on it.
@@ -1222,7 +1240,13 @@ static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st
     // the user's and the step from it is capped by that dt.
     // (REBOUND flips its sign for a run backwards: a reversal, not a new dt.)
     // (Asked only where an output is held: mid-run, nothing is.)
-    c->shown = c->eligible && st->output_N != 0 && !user_set_dt(r, st, c) && pfvi_output_is_shown(r, st);
+    c->user_cap = (c->eligible && st->output_N != 0) ? user_cap_cut(st, c) : 0.;
+    c->shown = c->eligible && st->output_N != 0 && !user_set_dt(r, st, c) && c->user_cap == 0.
+        && pfvi_output_is_shown(r, st);
+    if (c->user_cap != 0. && st->dt_user != c->user_cap){
+        st->dt_user = c->user_cap;
+        st->dt_user_spent = 0;
+    }
     // The run's last step's end as REBOUND's periodic wrap left it: the end
     // itself again, so that a time inside that step is shown from there as
     // without the wrap; the wrap is made again where the run goes on
@@ -1247,13 +1271,17 @@ static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st
     c->at_end = c->shown || (c->eligible && c->finishing && (loaded_end || pfvi_state_is_end(r, st)));
     if (c->eligible && !c->finishing && !c->shown && st->dt_proposed != 0. && r->dt != 0.
             && st->output_last_t1 != st->output_last_t0 && r->t == st->output_last_t1
-            && fabs(r->dt) != fabs(st->dt_proposed) && (st->end_N == 0 || rebound_restored_at_end(r, st))){
+            && fabs(r->dt) != fabs(st->dt_proposed)
+            && ((st->end_N == 0) ? (!st->snapshot_between_calls || rebound_restored(r, st, 1))
+                : rebound_restored_at_end(r, st))){
         // Such a snapshot holds as sim.dt the cut REBOUND made to finish on
         // the next output (it writes it after deciding to finish, before the
         // call that does); the run would have gone on with its proposal.
         // So does a call whose step ended exactly on its time: REBOUND cut
         // nothing and restored its last full step or the dt the call began
         // with, which would cap the next step (issue 42: 23 of 40 step ends).
+        // (A snapshot written between calls holds sim.dt as the run left it:
+        // judged as the run judges it.)
         r->dt = copysign(st->dt_proposed, r->dt);
     }
     // (A value of REBOUND's own would cap the next step.)
@@ -1381,7 +1409,13 @@ static enum pfvi_glue glue_step(struct reb_simulation* r, struct pfvi_state* st,
     const double t0 = c->t0;
     // With collisions and radii, or exit_min_distance: retaken to end at the
     // first contact its path shows (pfvi_contact.c).
-    st->output_uncapped = c->dense;
+    st->output_uncapped = c->dense && c->user_cap == 0.;
+    if (c->user_cap != 0.){
+        // The user's value caps the step from the output (a step past the
+        // time shows it, as any output step), as a call to a later time
+        // takes it.
+        r->dt = copysign(c->user_cap, r->dt);
+    }
     // (sim.dt as the run proposed it is no cut of REBOUND's: capping there
     // would leave slivers of the track's interval where the force model
     // changes between steps, as an ODE's state does.)
@@ -1395,6 +1429,7 @@ static enum pfvi_glue glue_step(struct reb_simulation* r, struct pfvi_state* st,
         pfvi_report(r, st);
         if (r->t == t0){
             glue_show_again(r, st, c);
+            r->dt = (c->user_cap != 0.) ? c->dt_entry : r->dt;
         }
         return PFVI_GLUE_DONE;
     }
@@ -1431,6 +1466,7 @@ static enum pfvi_glue glue_step(struct reb_simulation* r, struct pfvi_state* st,
     // keeps the step it can draw back.)
     r->dt_last_done = (c->shown && c->finishing && !(pfvi_contact_line(r) && pfvi_contact_enabled(r)))
         ? r->t - c->t_entry : h;
+    st->dt_user_spent = st->dt_user_spent || c->user_cap != 0.;   // (REBOUND restores it after the call)
     struct pfvi_statistics* const stats = &st->statistics;
     stats->n_steps++;
     stats->iterations_mean = (double)stats->n_iterations/(double)stats->n_steps;
@@ -1443,9 +1479,18 @@ static enum pfvi_glue glue_step(struct reb_simulation* r, struct pfvi_state* st,
             // REBOUND's <Y> adds Y at the step's end times the step (a
             // rectangle rule, coarse at pfvi's long steps): the sum is given
             // the step's quadrature of Y over its stages instead.
-            const double Y_end = (r->megno_Ys + st->trial.megno_dY)/(r->t - r->megno_initial_t);
+            const double Y_end = megno_Y(r->megno_Ys + st->trial.megno_dY, r->t - r->megno_initial_t);
             r->megno_Yss += st->trial.megno_Y_integral - Y_end*h;
-            reb_tools_megno_update(r, st->trial.megno_dY, h);
+            if (r->t == r->megno_initial_t){
+                // REBOUND's update divides by the time since MEGNO began: at
+                // that time itself (a way back landing on it exactly, as
+                // symmetric steps do) its running Y is 0/0, and every value
+                // after it NaN (IAS15 passes the instant by). The sum goes
+                // on; the averages skip the instant.
+                r->megno_Ys += st->trial.megno_dY;
+            }else{
+                reb_tools_megno_update(r, st->trial.megno_dY, h);
+            }
         }
     }
     st->output_last_t0 = t0;
@@ -1612,7 +1657,16 @@ static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
         return;
     }
     st->in_step = PFVI_STEP_RUNNING;
-    st->in_call = (st->in_call == PFVI_CALL_STARTING) ? PFVI_CALL_INSIDE : st->in_call;
+    if (!st->request_set){
+        // sim.steps() (no integrate() is running): between calls. A
+        // simulation loaded from a snapshot written between calls judges its
+        // sim.dt here as on an integrate() (pfvi_request_begin), and so does
+        // a copy made after steps() (before, both took the value for the
+        // snapshot's: a copy's first step 0.69 where its original's was the
+        // 0.01 set on both; a hostile trial).
+        st->snapshot_between_calls = st->end_N == 0 && st->dt_proposed != 0. && st->in_call == PFVI_CALL_BETWEEN;
+    }
+    st->in_call = st->request_set ? PFVI_CALL_INSIDE : PFVI_CALL_BETWEEN;
     st->reentry_refused = 0;
     st->request_shown = 0;
     st->status_at_start = (int)r->status;
@@ -1629,9 +1683,19 @@ static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
     // dt_last_done the run's step before it, which integrate() reset): as
     // the run it continues, whose last full step that was (request_end
     // leaves it as sim.dt where REBOUND restores the cut).
-    const int loaded_cut = finishing && !st->last_finishing && r->dt_last_done == 0. && st->end_N == 0
-        && st->request_set && st->request_dt_last_done != 0.;
-    st->request_loaded_cut = st->request_loaded_cut || loaded_cut;
+    // (Not a copy or snapshot written between calls: its sim.dt is the
+    // simulation's own, and its bookkeeping the run's.)
+    const int loaded_start = finishing && r->dt_last_done == 0. && st->end_N == 0 && st->request_set
+        && !st->snapshot_between_calls;
+    const int loaded_cut = loaded_start && !st->last_finishing && st->request_dt_last_done != 0.;
+    const int loaded_cut_again = loaded_start && st->last_finishing && st->request_began_last_step
+        && st->dt_rebound_leaves != 0.;
+    const int loaded_entry_cut = loaded_start && st->request_entry_cut != 0.;
+    if (loaded_cut || loaded_cut_again || loaded_entry_cut){
+        st->request_dt_restore = loaded_entry_cut ? st->request_entry_cut
+            : fabs(loaded_cut ? st->request_dt_last_done : st->dt_rebound_leaves);
+    }
+    st->request_loaded_cut = st->request_loaded_cut || loaded_cut || loaded_cut_again || loaded_entry_cut;
     if (finishing && !st->last_finishing && (r->dt_last_done != 0. || loaded_cut)){
         st->dt_rebound_leaves = loaded_cut ? st->request_dt_last_done : r->dt_last_done;
         // (REBOUND restores that, not the value the call began with.)
@@ -1674,7 +1738,11 @@ static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
         st->dt_call_default = by_default;
         st->dt_call_first_cut = 0;
         st->dt_call_cut = 0.;
-    }else if (call_start && finishing && loaded && !loaded_cut){
+    }else if (call_start && finishing && loaded && !loaded_cut && !st->snapshot_between_calls
+            && st->request_entry_cut == 0.){
+        // (A snapshot written between calls or at a call's start holds its own
+        // sim.dt, or the value the call began with, which REBOUND cut here and
+        // restores after the call, as in the run it copies.)
         st->dt_call_cut = st->dt_at_start;
         if (fresh && cut_from_known && fabs(st->dt_at_sync) == PFVI_REBOUND_DT_DEFAULT){
             // REBOUND cut a new simulation's 0.001 to a time within it, and
@@ -1814,9 +1882,22 @@ double pfvi_request_begin(struct reb_simulation* r, double t){
     }
     // (an enclosing call's, returned to be given back: a callback's integrate() is refused)
     const double held = st->request_set ? st->request_t : NAN;
-    st->snapshot_between_calls = !st->request_set && st->end_N == 0 && st->dt_proposed != 0.
-        && (st->in_call == PFVI_CALL_BETWEEN || (st->in_call == PFVI_CALL_STARTING && r->status != REB_STATUS_LAST_STEP));
-    st->in_call = PFVI_CALL_STARTING;
+    if (!st->request_set){
+        // What the snapshot says of itself (a loaded or copied simulation's),
+        // read before this call overwrites it.
+        const int loaded = st->end_N == 0 && st->dt_proposed != 0.;
+        const int last_step = (r->status == REB_STATUS_LAST_STEP);
+        // (A call's start where REBOUND cut sim.dt to finish holds the cut, not
+        // the user's value: judged as a cut where the restart's call does not
+        // finish there, request_entry_cut where it does.)
+        st->snapshot_between_calls = loaded && (st->in_call == PFVI_CALL_BETWEEN
+            || (st->in_call == PFVI_CALL_STARTING && !last_step));
+        st->request_began_last_step = last_step && st->in_call == PFVI_CALL_INSIDE;
+        st->request_entry_cut = (loaded && last_step && st->in_call == PFVI_CALL_STARTING) ? fabs(st->dt_call_entry) : 0.;
+        // (there, the call the snapshot began: the value it began with)
+        st->dt_call_entry = (st->request_entry_cut != 0.) ? copysign(st->request_entry_cut, r->dt) : r->dt;
+        st->in_call = PFVI_CALL_STARTING;
+    }
     st->request_set = 1;
     st->request_t = t;
     st->request_dt_leaves = 0.;
@@ -1835,14 +1916,14 @@ void pfvi_request_end(struct reb_simulation* r, double held){
         // The call ends: sim.dt as REBOUND's own finish on the time leaves it.
         r->dt = st->request_dt_leaves;
     }else if (st->request_set && st->request_loaded_cut && r->exact_finish_time == 1 && st->in_step == PFVI_STEP_IDLE
-            && fabs(r->dt) != fabs(st->request_dt_last_done)){
+            && fabs(r->dt) != st->request_dt_restore){
         // REBOUND restored the cut a loaded simulation's call began on (its
         // last full step, to REBOUND); the run it continues had its step
         // before the cut restored. Taken as a cap, the cut made a restarted
         // archive of a run with a timestep hook or a heartbeat that edits
         // every step, and outputs, take a step the run did not (4 of 12
         // snapshots off, 1.6e-2: a hostile trial).
-        r->dt = copysign(st->request_dt_last_done, r->dt);
+        r->dt = copysign(st->request_dt_restore, r->dt);
     }
     if (st->request_set && r->exact_finish_time == 1 && st->in_step == PFVI_STEP_IDLE && st->dt_user_spent
             && fabs(r->dt) == st->dt_user && st->dt_proposed != 0. && fabs(st->dt_proposed) != st->dt_user){
@@ -1862,6 +1943,7 @@ void pfvi_request_end(struct reb_simulation* r, double held){
     st->request_t = st->request_set ? held : 0.;
     st->in_call = st->request_set ? PFVI_CALL_INSIDE : PFVI_CALL_BETWEEN;
     st->snapshot_between_calls = st->snapshot_between_calls && st->request_set;
+    st->request_entry_cut = st->request_set ? st->request_entry_cut : 0.;
 }
 
 const char* pfvi_rebound_version_compiled(void){
