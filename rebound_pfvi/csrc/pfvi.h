@@ -1041,7 +1041,11 @@ struct pfvi_replay {
 #define PFVI_REPLAY_PIN_DRIFT 1e-5
 
 // Whether a snapshot was written inside an integrate() (struct pfvi_state's in_call).
-enum { PFVI_CALL_UNKNOWN = 0, PFVI_CALL_INSIDE = 1, PFVI_CALL_BETWEEN = 2, PFVI_CALL_STARTING = 3 };
+// PFVI_CALL_STARTING_CUT: a simulation loaded from a call's start where
+// REBOUND had cut sim.dt to finish, that a call since has not stepped
+// (REBOUND's status, which said so, is gone).
+enum { PFVI_CALL_UNKNOWN = 0, PFVI_CALL_INSIDE = 1, PFVI_CALL_BETWEEN = 2, PFVI_CALL_STARTING = 3,
+       PFVI_CALL_STARTING_CUT = 4 };
 
 // Integrator state: settings, statistics and the controller's state are
 // REBOUND fields (saved in archives); the scratch grows only with N.

@@ -1240,7 +1240,10 @@ static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st
     // the user's and the step from it is capped by that dt.
     // (REBOUND flips its sign for a run backwards: a reversal, not a new dt.)
     // (Asked only where an output is held: mid-run, nothing is.)
-    c->user_cap = (c->eligible && st->output_N != 0) ? user_cap_cut(st, c) : 0.;
+    // (Also where the simulation holds the run's own step end, no output:
+    // else the cap waited for the next call, whose sim.dt REBOUND restored
+    // to it: a hostile trial, 14 steps against 12.)
+    c->user_cap = c->eligible ? user_cap_cut(st, c) : 0.;
     c->shown = c->eligible && st->output_N != 0 && !user_set_dt(r, st, c) && c->user_cap == 0.
         && pfvi_output_is_shown(r, st);
     if (c->user_cap != 0. && st->dt_user != c->user_cap){
@@ -1886,7 +1889,9 @@ double pfvi_request_begin(struct reb_simulation* r, double t){
         // What the snapshot says of itself (a loaded or copied simulation's),
         // read before this call overwrites it.
         const int loaded = st->end_N == 0 && st->dt_proposed != 0.;
-        const int last_step = (r->status == REB_STATUS_LAST_STEP);
+        const int cut_start = (st->in_call == PFVI_CALL_STARTING_CUT);
+        const int last_step = (r->status == REB_STATUS_LAST_STEP) || cut_start;
+        st->in_call = cut_start ? PFVI_CALL_STARTING : st->in_call;
         // (A call's start where REBOUND cut sim.dt to finish holds the cut, not
         // the user's value: judged as a cut where the restart's call does not
         // finish there, request_entry_cut where it does.)
@@ -1941,7 +1946,13 @@ void pfvi_request_end(struct reb_simulation* r, double held){
     st->request_dt_leaves = 0.;
     st->request_set = !isnan(held);
     st->request_t = st->request_set ? held : 0.;
-    st->in_call = st->request_set ? PFVI_CALL_INSIDE : PFVI_CALL_BETWEEN;
+    // A call that took no step (integrate() to the time it is at) on a
+    // simulation loaded from a call's start where REBOUND had cut sim.dt:
+    // still that snapshot, its sim.dt the cut (a hostile trial: taken for
+    // the user's at the next call, 3.4e-2 off). (dt_call_entry holds the
+    // value that call began with, as pfvi_request_begin set it.)
+    const int unstepped_cut = !st->request_set && st->in_call == PFVI_CALL_STARTING && st->request_entry_cut != 0.;
+    st->in_call = unstepped_cut ? PFVI_CALL_STARTING_CUT : (st->request_set ? PFVI_CALL_INSIDE : PFVI_CALL_BETWEEN);
     st->snapshot_between_calls = st->snapshot_between_calls && st->request_set;
     st->request_entry_cut = st->request_set ? st->request_entry_cut : 0.;
 }
