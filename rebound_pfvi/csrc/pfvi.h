@@ -1349,6 +1349,12 @@ struct pfvi_state {
     // pfvi_request_end puts back as the run's REBOUND did; else 0.
     double dt_call_entry;
     double request_entry_cut;
+    // What REBOUND restores sim.dt to after the running call (its last full
+    // step: the dt_last_done before its first finishing step, else the value
+    // the call began with), saved with request_dt_leaves, request_loaded_cut
+    // and request_dt_restore: a snapshot REBOUND writes at a call's end
+    // holds that restore, before pfvi_request_end replaces it.
+    double dt_rebound_raw;
     // Whether an integrate() is running (PFVI_CALL_INSIDE; before its first
     // step, PFVI_CALL_STARTING) or not (PFVI_CALL_BETWEEN), saved: a
     // snapshot says whether it was written inside a call, as REBOUND's

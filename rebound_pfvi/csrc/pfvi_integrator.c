@@ -427,6 +427,10 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
     { "", REB_INT, "dt_user_spent", offsetof(struct pfvi_state, dt_user_spent), 0, 0, 0 },
     { "", REB_INT, "in_call", offsetof(struct pfvi_state, in_call), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_call_entry", offsetof(struct pfvi_state, dt_call_entry), 0, 0, 0 },
+    { "", REB_DOUBLE, "dt_rebound_raw", offsetof(struct pfvi_state, dt_rebound_raw), 0, 0, 0 },
+    { "", REB_DOUBLE, "request_dt_leaves", offsetof(struct pfvi_state, request_dt_leaves), 0, 0, 0 },
+    { "", REB_INT, "request_loaded_cut", offsetof(struct pfvi_state, request_loaded_cut), 0, 0, 0 },
+    { "", REB_DOUBLE, "request_dt_restore", offsetof(struct pfvi_state, request_dt_restore), 0, 0, 0 },
     { "", REB_DOUBLE, "dt_call_cut", offsetof(struct pfvi_state, dt_call_cut), 0, 0, 0 },
     { "", REB_INT, "last_finishing", offsetof(struct pfvi_state, last_finishing), 0, 0, 0 },
     { "", REB_INT, "predictor_stages", offsetof(struct pfvi_state, predictor_stages), 0, 0, 0 },
@@ -1699,6 +1703,9 @@ static void pfvi_step_once(struct reb_simulation* r, struct pfvi_state* st){
             : fabs(loaded_cut ? st->request_dt_last_done : st->dt_rebound_leaves);
     }
     st->request_loaded_cut = st->request_loaded_cut || loaded_cut || loaded_cut_again || loaded_entry_cut;
+    if (finishing && !st->last_finishing && r->dt_last_done != 0.){
+        st->dt_rebound_raw = fabs(r->dt_last_done);   // (what REBOUND keeps as its last full step)
+    }
     if (finishing && !st->last_finishing && (r->dt_last_done != 0. || loaded_cut)){
         st->dt_rebound_leaves = loaded_cut ? st->request_dt_last_done : r->dt_last_done;
         // (REBOUND restores that, not the value the call began with.)
@@ -1878,6 +1885,36 @@ int pfvi_options_check(struct reb_simulation* r){
     return st ? pfvi_options_valid(r, &st->settings) : -1;
 }
 
+// What pfvi_request_end leaves as sim.dt where REBOUND restored dt after
+// a call, with the bookkeeping it updates (also replayed for a snapshot
+// REBOUND wrote at a call's end, before this ran: pfvi_request_begin).
+static double request_end_dt(struct pfvi_state* st, double dt){
+    if (st->request_dt_leaves != 0.){
+        // The call ends: sim.dt as REBOUND's own finish on the time leaves it.
+        dt = st->request_dt_leaves;
+    }else if (st->request_loaded_cut && fabs(dt) != st->request_dt_restore){
+        // REBOUND restored the cut a loaded simulation's call began on (its
+        // last full step, to REBOUND); the run it continues had its step
+        // before the cut restored. Taken as a cap, the cut made a restarted
+        // archive of a run with a timestep hook or a heartbeat that edits
+        // every step, and outputs, take a step the run did not (4 of 12
+        // snapshots off, 1.6e-2: a hostile trial).
+        dt = copysign(st->request_dt_restore, dt);
+    }
+    if (st->dt_user_spent && fabs(dt) == st->dt_user && st->dt_proposed != 0. && fabs(st->dt_proposed) != st->dt_user){
+        // REBOUND restored a user's cap that a step took in full (the call's
+        // last full step): left as it is, the next call could not tell it
+        // from the user setting it again, and either every later call's
+        // first step was capped (200 steps at 100 outputs for one call's 5,
+        // the run 1e-11 off) or a user's sim.dt before each call was not. The
+        // run's proposal stands instead, pfvi's own: what a run that the cap
+        // did not end on leaves.
+        dt = copysign(st->dt_proposed, dt);
+        st->dt_rebound_leaves = dt;
+    }
+    return dt;
+}
+
 double pfvi_request_begin(struct reb_simulation* r, double t){
     struct pfvi_state* const st = pfvi_state_of(r);
     if (!st){
@@ -1889,6 +1926,19 @@ double pfvi_request_begin(struct reb_simulation* r, double t){
         // What the snapshot says of itself (a loaded or copied simulation's),
         // read before this call overwrites it.
         const int loaded = st->end_N == 0 && st->dt_proposed != 0.;
+        if (loaded && st->in_call == PFVI_CALL_INSIDE && r->status == REB_STATUS_SUCCESS && r->exact_finish_time == 1
+                && st->dt_rebound_raw != 0.){
+            // A snapshot REBOUND wrote at a call's end, after restoring sim.dt
+            // and before pfvi's end of the call: that end now, as the run
+            // had it before its next call (unless the user set sim.dt since),
+            // and the simulation is between calls (before, its restore was
+            // taken for the user's: 10 of 244 restarts off; the second
+            // hostile trial of 2026-11-29).
+            const double left = request_end_dt(st, copysign(st->dt_rebound_raw, r->dt));
+            r->dt = (fabs(r->dt) == fabs(st->dt_rebound_raw)) ? left : r->dt;
+            st->in_call = PFVI_CALL_BETWEEN;
+        }
+        st->dt_rebound_raw = fabs(r->dt);   // (REBOUND's restore unless a finish takes a last full step)
         const int cut_start = (st->in_call == PFVI_CALL_STARTING_CUT);
         const int last_step = (r->status == REB_STATUS_LAST_STEP) || cut_start;
         st->in_call = cut_start ? PFVI_CALL_STARTING : st->in_call;
@@ -1916,31 +1966,8 @@ void pfvi_request_end(struct reb_simulation* r, double held){
     if (!st){
         return;
     }
-    if (st->request_set && st->request_dt_leaves != 0. && r->exact_finish_time == 1
-            && st->in_step == PFVI_STEP_IDLE){
-        // The call ends: sim.dt as REBOUND's own finish on the time leaves it.
-        r->dt = st->request_dt_leaves;
-    }else if (st->request_set && st->request_loaded_cut && r->exact_finish_time == 1 && st->in_step == PFVI_STEP_IDLE
-            && fabs(r->dt) != st->request_dt_restore){
-        // REBOUND restored the cut a loaded simulation's call began on (its
-        // last full step, to REBOUND); the run it continues had its step
-        // before the cut restored. Taken as a cap, the cut made a restarted
-        // archive of a run with a timestep hook or a heartbeat that edits
-        // every step, and outputs, take a step the run did not (4 of 12
-        // snapshots off, 1.6e-2: a hostile trial).
-        r->dt = copysign(st->request_dt_restore, r->dt);
-    }
-    if (st->request_set && r->exact_finish_time == 1 && st->in_step == PFVI_STEP_IDLE && st->dt_user_spent
-            && fabs(r->dt) == st->dt_user && st->dt_proposed != 0. && fabs(st->dt_proposed) != st->dt_user){
-        // REBOUND restored a user's cap that a step took in full (the call's
-        // last full step): left as it is, the next call could not tell it
-        // from the user setting it again, and either every later call's
-        // first step was capped (200 steps at 100 outputs for one call's 5,
-        // the run 1e-11 off) or a user's sim.dt before each call was not. The
-        // run's proposal stands instead, pfvi's own: what a run that the cap
-        // did not end on leaves.
-        r->dt = copysign(st->dt_proposed, r->dt);
-        st->dt_rebound_leaves = r->dt;
+    if (st->request_set && r->exact_finish_time == 1 && st->in_step == PFVI_STEP_IDLE){
+        r->dt = request_end_dt(st, r->dt);
     }
     st->request_loaded_cut = 0;
     st->request_dt_leaves = 0.;
