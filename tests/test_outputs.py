@@ -229,6 +229,29 @@ def test_a_users_dt_at_least_the_time_to_the_next_output_caps_as_in_one_call(bui
     assert runs[1][1] == runs[0][1]
 
 
+@pytest.mark.parametrize("edit", [("epsilon", 1e-5), ("epsilon", 1e-8), ("stages", 5), ("stages", 3)])
+@pytest.mark.parametrize("build", [lambda: kepler(e=0.6), two_planets], ids=["kepler", "two-planets"])
+def test_an_edit_at_an_output_leaves_the_run_independent_of_the_outputs_after_it(build, edit):
+    # The step from an edited output was capped by the sim.dt REBOUND
+    # restored after the last call (its last full step, set by the output
+    # times), and not capped where REBOUND cut it to finish on the next
+    # output (a hostile trial: epsilon 1e-5 set at t = 2.09, 7 steps to t =
+    # 4.6 in one call, 6 with one more output; 124 of 200 fuzzed runs off).
+    name, value = edit
+    runs = []
+    for before, after in (([2.0884907111347983], [4.597597792967187]),
+                          ([0.3, 0.7, 1.4, 2.0884907111347983], [2.7520986472187796, 3.1, 4.597597792967187]),
+                          ([2.0884907111347983], [2.1 + 0.1*k for k in range(25)] + [4.597597792967187])):
+        sim = build()
+        for t in before:
+            sim.integrate(t)
+        setattr(sim.integrator, name, value)
+        for t in after:
+            sim.integrate(t)
+        runs.append((state(sim).tobytes(), sim.integrator.n_steps))
+    assert runs[1] == runs[0] and runs[2] == runs[0]
+
+
 def test_a_dt_equal_to_the_time_to_the_next_output_twice_in_a_row_caps_two_steps_once_each():
     # The second such sim.dt, set where the simulation held the run's own
     # step end (the first cap ended exactly on its output), waited for the
