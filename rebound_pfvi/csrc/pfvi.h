@@ -1368,6 +1368,10 @@ struct pfvi_state {
     // taken for the snapshot's and a copy went 1e-11 from its original).
     int in_call;
     int snapshot_between_calls;
+    // A shown output dropped because particles were added or removed
+    // (pfvi_scratch) since: glue_entry takes it as an output edited, as any
+    // other edit there (until read; never saved).
+    int output_resized;
     // The sim.dt REBOUND leaves after an integrate() that ended on an output
     // (its last full step: the dt_last_done before the finishing step, or
     // the dt the call started with), so that a sim.dt the user sets after

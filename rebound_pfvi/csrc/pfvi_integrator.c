@@ -1270,10 +1270,13 @@ static enum pfvi_glue glue_entry(struct reb_simulation* r, struct pfvi_state* st
         return PFVI_GLUE_DONE;   // (the output still shown, as it was)
     }
     c->shown = c->shown && hold;
-    if (c->user_cap == 0. && !c->shown && !c->unwrapped && c->eligible && st->output_N != 0 && st->dt_proposed != 0.
+    const int output_held = st->output_N != 0 || st->output_resized;
+    st->output_resized = 0;
+    if (c->user_cap == 0. && !c->shown && !c->unwrapped && c->eligible && output_held && st->dt_proposed != 0.
             && st->call_is_integrate && st->request_set && !user_set_dt(r, st, c)){
         // An output held and taken as edited (an option, a particle or a
-        // force changed since): the step from it starts from the run's own
+        // force changed, a particle added or removed since): the step from
+        // it starts from the run's own
         // proposal, not from the sim.dt REBOUND restored after the last call
         // (its last full step, which depends on the output times), nor from
         // REBOUND's cut to finish on the next one, so that outputs leave the

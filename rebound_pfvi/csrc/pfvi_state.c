@@ -130,6 +130,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
         st->density_N = 0;
         st->end_N = 0;
         st->end_saved_N = 0;
+        st->output_resized = st->output_resized || st->output_N != 0;   // (glue_entry: an edit at an output)
         st->output_N = 0;  // a shown output described the old particles
     }
     if (N <= st->N_allocated){
