@@ -183,6 +183,7 @@ def test_a_users_dt_caps_whatever_came_before(sequence, tmp_path):
     assert h <= u*(1 + 1e-12) + 8*np.spacing(sim.t)
 
 
+@needs_python_heartbeat
 @pytest.mark.parametrize("build", [lambda: kepler(e=0.5, epsilon=1e-7), lambda: retrograde_planets(epsilon=1e-9),
                                    lambda: two_planets()], ids=["kepler", "retrograde-planets", "two-planets"])
 @pytest.mark.parametrize("u", [0.01, 1e-4])
