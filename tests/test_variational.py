@@ -16,6 +16,7 @@ import pytest
 import rebound
 
 import rebound_pfvi
+from conftest import two_planets
 
 STATE = ("x", "y", "z", "vx", "vy", "vz")
 
@@ -209,12 +210,7 @@ def test_megno_stays_finite_through_its_initial_time_on_the_way_back():
     # REBOUND's update divides by the time since MEGNO began; pfvi's
     # symmetric steps land back on that time exactly, where it was 0/0 and
     # MEGNO NaN for good after (a hostile trial; IAS15 passes the instant).
-    sim = rebound.Simulation()
-    sim.add(m=1.0)
-    sim.add(m=1e-3, a=1.0, e=0.3)
-    sim.add(m=1e-3, a=1.7, e=0.1)
-    sim.move_to_com()
-    sim.integrator = "pfvi"
+    sim = two_planets()
     sim.init_megno(seed=1)
     sim.integrate(0.285)
     sim.integrate(-0.5)
