@@ -663,11 +663,11 @@ struct pfvi_newton {
     size_t companion;   // SINGLE about a pair's barycentre: the partner's partner (else SIZE_MAX)
     int mc;                        // the unknowns the step's forces depend on (the leading ones)
     double P[PFVI_STAGES_MAX][PFVI_STAGES_MAX];   // LU of I + S diag(g) X over them
-    int Ppiv[PFVI_STAGES_MAX];
+    int Pperm[PFVI_STAGES_MAX];                   // its rows' order (row k: row Pperm[k])
     double Pinv[PFVI_STAGES_MAX];                 // its pivots' reciprocals
     double Q[PFVI_STAGES_MAX-1][PFVI_STAGES_MAX]; // P^-1 S
     double C[PFVI_STAGES_MAX][PFVI_STAGES_MAX];   // LU of Woodbury's capacitance matrix
-    int Cpiv[PFVI_STAGES_MAX];
+    int Cperm[PFVI_STAGES_MAX];
     double Cinv[PFVI_STAGES_MAX];
     double n[PFVI_STAGES_MAX][3];  // direction from the partner at each stage (softened length)
     double d[PFVI_STAGES_MAX];     // the rank-one weight 3 fscale alpha_k

@@ -53,7 +53,10 @@
 #define LU_MAX PFVI_STAGES_MAX
 
 // LU factorisation with partial pivoting of the n x n matrix A (n <= 8) in
-// place, and the pivots' reciprocals; 0 if a pivot is zero or not finite.
+// place, the pivots' reciprocals, and the rows' order: row k of the factors
+// is row perm[k] of A (the swaps composed, so a solve gathers its right-hand
+// side in one pass of independent loads, not a chain of swaps through
+// memory); 0 if a pivot is zero or not finite.
 // A row of A (LU_MAX = 8 doubles) is two vectors of lanes: a row swap is
 // the whole row's (the columns beyond n are never read), and the
 // elimination A[i][j] -= g A[k][j] is made in every lane, the result kept
@@ -62,8 +65,11 @@
 typedef char lu_rows_are_two_vectors[(LU_MAX == 8) ? 1 : -1];
 
 
-static inline __attribute__((always_inline)) int lu_factor(int n, double (*A)[LU_MAX], int* piv, double* inverse){
+static inline __attribute__((always_inline)) int lu_factor(int n, double (*A)[LU_MAX], int* perm, double* inverse){
     const pfvi_lane_mask column_lo = {0, 1, 2, 3}, column_hi = {4, 5, 6, 7};
+    for (int k=0; k<n; k++){
+        perm[k] = k;
+    }
     for (int k=0; k<n; k++){
         // (the pivot's magnitude carried beside its row: the same
         // comparisons as fabs(A[i][k]) > fabs(A[p][k]))
@@ -74,7 +80,7 @@ static inline __attribute__((always_inline)) int lu_factor(int n, double (*A)[LU
             p = (a > largest) ? i : p;
             largest = (a > largest) ? a : largest;
         }
-        piv[k] = p;
+        const int t = perm[p]; perm[p] = perm[k]; perm[k] = t;
         pfvi_lanes rk_lo, rk_hi;
         memcpy(&rk_lo, &A[p][0], sizeof(rk_lo));
         memcpy(&rk_hi, &A[p][4], sizeof(rk_hi));
@@ -107,12 +113,18 @@ static inline __attribute__((always_inline)) int lu_factor(int n, double (*A)[LU
 
 // Solves with lu_factor's factors for `width` right-hand sides b[row][0 ..
 // width-1] in place. (The factors are of the rows as finally permuted:
-// every swap first, then L, then U.)
-static inline __attribute__((always_inline)) void lu_solve(int n, const double (*A)[LU_MAX], const int* piv,
+// the rows gathered first, then L, then U.)
+static inline __attribute__((always_inline)) void lu_solve(int n, const double (*A)[LU_MAX], const int* perm,
         const double* inverse, double (*b)[3], int width){
+    double gathered[LU_MAX][3];
     for (int k=0; k<n; k++){
         for (int c=0; c<width; c++){
-            const double t = b[piv[k]][c]; b[piv[k]][c] = b[k][c]; b[k][c] = t;
+            gathered[k][c] = b[perm[k]][c];
+        }
+    }
+    for (int k=0; k<n; k++){
+        for (int c=0; c<width; c++){
+            b[k][c] = gathered[k][c];
         }
     }
     for (int k=0; k<n; k++){
@@ -156,18 +168,14 @@ static inline __attribute__((always_inline)) void newton_factor_classical_rest(c
         const double (*n)[3], struct pfvi_newton* u, const int mc, const int K){
 #define ALL(x) ((pfvi_lanes){(x), (x), (x), (x)})
     pfvi_lanes lo[PFVI_STAGES_MAX], hi[PFVI_STAGES_MAX];
-    for (int l=0; l<mc; l++){
+    for (int k=0; k<mc; k++){
+        // (S's rows in the factors' order)
         double row[8] = {0., 0., 0., 0., 0., 0., 0., 0.};
         for (int c=0; c<K; c++){
-            row[c] = f->S[l][1 + c];
+            row[c] = f->S[u->Pperm[k]][1 + c];
         }
-        memcpy(&lo[l], row, sizeof(lo[l]));
-        memcpy(&hi[l], row + 4, sizeof(hi[l]));
-    }
-    for (int k=0; k<mc; k++){
-        const int p = u->Ppiv[k];
-        pfvi_lanes t = lo[p]; lo[p] = lo[k]; lo[k] = t;
-        t = hi[p]; hi[p] = hi[k]; hi[k] = t;
+        memcpy(&lo[k], row, sizeof(lo[k]));
+        memcpy(&hi[k], row + 4, sizeof(hi[k]));
     }
     for (int k=0; k<mc; k++){
         for (int i=k+1; i<mc; i++){
@@ -261,12 +269,12 @@ static inline __attribute__((always_inline)) int newton_factor_form(const struct
             u->P[l][j] = sum;
         }
     }
-    if (!lu_factor(mc, u->P, u->Ppiv, u->Pinv)){
+    if (!lu_factor(mc, u->P, u->Pperm, u->Pinv)){
         return 0;
     }
     if (classical){
         newton_factor_classical_rest(f, n, u, mc, K);
-        return lu_factor(K, u->C, u->Cpiv, u->Cinv);
+        return lu_factor(K, u->C, u->Cperm, u->Cinv);
     }
     // Q = P^-1 S, its columns 1 .. K (in rows of up to 3: the solve's width).
     for (int k0=1; k0<=K; k0+=3){
@@ -277,7 +285,7 @@ static inline __attribute__((always_inline)) int newton_factor_form(const struct
                 cols[l][c] = f->S[l][k0 + c];
             }
         }
-        lu_solve(mc, (const double (*)[LU_MAX])u->P, u->Ppiv, u->Pinv, cols, width);
+        lu_solve(mc, (const double (*)[LU_MAX])u->P, u->Pperm, u->Pinv, cols, width);
         for (int l=0; l<mc; l++){
             for (int c=0; c<width; c++){
                 u->Q[l][k0 + c] = cols[l][c];
@@ -298,7 +306,7 @@ static inline __attribute__((always_inline)) int newton_factor_form(const struct
             u->C[k-1][kk-1] = ((k == kk) ? 1. : 0.) + u->d[kk]*H*nn;
         }
     }
-    return lu_factor(K, u->C, u->Cpiv, u->Cinv);
+    return lu_factor(K, u->C, u->Cperm, u->Cinv);
 }
 
 PFVI_VECTOR_CLONES
@@ -337,14 +345,14 @@ static inline __attribute__((always_inline)) void newton_apply_classical_n(const
     const int mc = s - 2;
 #define ROW(x, y, z) ((pfvi_lanes){(x), (y), (z), 0.})
 #define ALL(x) ((pfvi_lanes){(x), (x), (x), (x)})
+    // (the coupled rows gathered in the factors' order: with s a constant,
+    // every index below is one, and B and t can stay in registers)
     pfvi_lanes B[PFVI_STAGES_MAX];
-    for (int l=0; l<s-1; l++){
-        B[l] = ROW(b[l][0], b[l][1], b[l][2]);
-    }
     for (int k=0; k<mc; k++){
-        const int p = u->Ppiv[k];
-        const pfvi_lanes t = B[p]; B[p] = B[k]; B[k] = t;
+        const int p = u->Pperm[k];
+        B[k] = ROW(b[p][0], b[p][1], b[p][2]);
     }
+    B[s-2] = ROW(b[s-2][0], b[s-2][1], b[s-2][2]);
     for (int k=0; k<mc; k++){
         for (int i=k+1; i<mc; i++){
             B[i] -= ALL(u->P[i][k])*B[k];
@@ -358,14 +366,13 @@ static inline __attribute__((always_inline)) void newton_apply_classical_n(const
         B[k] = sum*ALL(u->Pinv[k]);
     }
     pfvi_lanes n[PFVI_STAGES_MAX];
-    double t[PFVI_STAGES_MAX];
+    double nB[PFVI_STAGES_MAX], t[PFVI_STAGES_MAX];
     for (int k=1; k<=mc; k++){
         n[k] = ROW(u->n[k][0], u->n[k][1], u->n[k][2]);
-        t[k-1] = u->n[k][0]*B[k-1][0] + u->n[k][1]*B[k-1][1] + u->n[k][2]*B[k-1][2];
+        nB[k-1] = u->n[k][0]*B[k-1][0] + u->n[k][1]*B[k-1][1] + u->n[k][2]*B[k-1][2];
     }
     for (int k=0; k<mc; k++){
-        const int p = u->Cpiv[k];
-        const double x = t[p]; t[p] = t[k]; t[k] = x;
+        t[k] = nB[u->Cperm[k]];
     }
     for (int k=0; k<mc; k++){
         for (int i=k+1; i<mc; i++){
@@ -415,7 +422,7 @@ static void newton_apply(const struct pfvi_solve_form* f, const struct pfvi_newt
         }
     }
     const int mc = u->mc, K = f->k_last;
-    lu_solve(mc, (const double (*)[LU_MAX])u->P, u->Ppiv, u->Pinv, b, 3);
+    lu_solve(mc, (const double (*)[LU_MAX])u->P, u->Pperm, u->Pinv, b, 3);
     double t[PFVI_STAGES_MAX][3];
     for (int k=1; k<=K; k++){
         double xi[3] = {0., 0., 0.};
@@ -425,7 +432,7 @@ static void newton_apply(const struct pfvi_solve_form* f, const struct pfvi_newt
         }
         t[k-1][0] = u->n[k][0]*xi[0] + u->n[k][1]*xi[1] + u->n[k][2]*xi[2];
     }
-    lu_solve(K, (const double (*)[LU_MAX])u->C, u->Cpiv, u->Cinv, t, 1);
+    lu_solve(K, (const double (*)[LU_MAX])u->C, u->Cperm, u->Cinv, t, 1);
     for (int k=1; k<=K; k++){
         const double tau = t[k-1][0]*u->d[k];
         for (int l=0; l<mc; l++){
