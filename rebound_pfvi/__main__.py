@@ -39,8 +39,10 @@ SCENE_OPTIONS = {
     "--amplitude": ("amplitude", "length", ("oscillator",), "semi-major axis of the oscillator's ellipse"),
     "--epoch": ("epoch", "epoch", ("solar-system",),
                 'start: an ISO date (TDB), e.g. "1900-01-01", or a Julian date (TDB); default J2000'),
-    "--years": ("years", "number", ("solar-system",), "length of the run in Julian years (default 10)"),
-    "--every": ("every", "number", ("solar-system",), "days between outputs (default 10)"),
+    "--years": ("years", "number or time", ("solar-system",),
+                'length of the run: Julian years, or a time such as "0.5 yr" (default 10)'),
+    "--every": ("every", "number or time", ("solar-system",),
+                'time between outputs: days, or a time such as "12 h" (default 10)'),
     "--no-gr": ("gr", "off", ("solar-system",), "leave out GR (default: REBOUNDx's gr_full where it is installed)"),
 }
 
@@ -65,6 +67,15 @@ def _quantity(kind: str) -> Any:
 
 
 _number = _argument(units.plain_number, "number")
+
+
+def _number_or_time(text: str, name: str) -> Any:
+    """A plain number (in the option's own unit), or else a time with its unit."""
+    try:
+        float(text)
+    except ValueError:
+        return units.parse(text, "time", name)
+    return units.plain_number(text, name)
 _positive_int = _argument(checks.positive_int, "integer")
 _positive_float = _argument(checks.positive_number, "number")
 
@@ -159,7 +170,8 @@ def build_parser() -> argparse.ArgumentParser:
             compare.add_argument(option, action="store_const", const=False, default=None,
                                  help=f"{text} [{', '.join(scenes)}]")
             continue
-        parse = _number if kind == "number" else str if kind == "epoch" else _quantity(kind)
+        parse = (_number if kind == "number" else str if kind == "epoch"
+                 else _argument(_number_or_time, "number or time") if kind == "number or time" else _quantity(kind))
         compare.add_argument(option, type=parse, default=None, help=f"{text} [{', '.join(scenes)}]")
     compare.add_argument("--integrators", type=_families, default=None,
                          help="comma-separated families to run (default: all that apply to the scene)")

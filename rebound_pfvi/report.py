@@ -303,7 +303,13 @@ def warnings_section(rows: Iterable[Run]) -> str:
     for r in rows:
         for message in r.warnings:
             by_message.setdefault(message, []).append(f"{r.label} {_knob(r)}")
-    return "\n".join(f"- \"{m}\" ({', '.join(runs)}): {explain_warning(m)}." for m, runs in by_message.items())
+    lines = []
+    for m, runs in by_message.items():
+        meaning = explain_warning(m)
+        # (a warning with no explanation of its own is quoted once, not twice)
+        said = "" if meaning == m else f": {meaning.rstrip('.')}"
+        lines.append(f"- \"{m}\" ({', '.join(runs)}){said}.")
+    return "\n".join(lines)
 
 
 def verdict_section(results: Results) -> str:

@@ -178,6 +178,10 @@ WARNING_MEANINGS = {
     "predictor corrector loops in IAS15 did not converge":
         "IAS15's predictor-corrector iteration hit its limit in 10 or more steps, REBOUND's sign that the "
         "steps are too long for the tolerance; the run went on, and its error is measured like any other",
+    "Passing a velocity-dependent force to WHFAST":
+        "REBOUNDx's warning that WHFast's kick assumes forces that do not depend on velocity, so it takes GR "
+        "only approximately and its error grows with the force; the runs went on, and their errors are "
+        "measured like any other",
 }
 
 

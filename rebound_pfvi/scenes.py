@@ -945,6 +945,8 @@ AU_KM = 149597870.700
 YEAR_S = 365.25 * 86400.0
 #: How an epoch that is a plain number is read: a Julian date in TDB, DE421's time scale.
 EPOCH_SCALE = "tdb"
+#: A Julian date less a Modified Julian Date.
+MJD_OFFSET = 2400000.5
 
 
 def _ephemeris_install_line(what: str) -> str:
@@ -971,10 +973,35 @@ def de421_span() -> Tuple[float, float]:
     return float(eph.jalpha), float(eph.jomega)
 
 
-def _jd_text(jd: float) -> str:
+def _jd_text(jd: float, date_only: bool = True) -> str:
+    """A Julian date (TDB) as astropy's ISO date, or with the time to the
+    millisecond; "" where astropy cannot write it."""
+    import warnings
+
     from astropy.time import Time
 
-    return Time(jd, format="jd", scale=EPOCH_SCALE).iso[:10]
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")   # (ERFA's "dubious year" far outside any ephemeris)
+            iso = str(Time(jd, format="jd", scale=EPOCH_SCALE).iso)
+    except (ValueError, OverflowError):
+        return ""
+    return iso.split(" ")[0] if date_only else iso
+
+
+def _outside_span(what: str, jd: float, start: float, end: float) -> str:
+    """Why a Julian date (TDB) is outside DE421's span [start, end]: by how
+    much (an epoch a minute past the end reads as the end's day), and where
+    it would be inside as an MJD, that it may be one."""
+    past = (jd - end) if jd > end else (start - jd)
+    past_text = f"{past * 86400.0:.3g} s" if past < 1.0 else f"{past:.6g} days"
+    side = "after its end" if jd > end else "before its start"
+    at = _jd_text(jd, date_only=False)
+    text = (f"{what} (JD {jd:.6f} TDB{', ' + at if at else ''}) is outside DE421's span, {past_text} {side}: "
+            f"JD {start:.1f} to {end:.1f} TDB ({_jd_text(start)} to {_jd_text(end)})")
+    if start <= jd + MJD_OFFSET <= end:
+        text += f"; if it is a Modified Julian Date, the Julian date is {jd + MJD_OFFSET:.6f}"
+    return text
 
 
 def _is_number(text: str) -> bool:
@@ -1017,8 +1044,7 @@ def de421_epoch(epoch: Any) -> Tuple[float, float]:
     start, end = de421_span()
     jd = jd1 + jd2
     if not start <= jd <= end:
-        raise ValueError(f"epoch={epoch!r} (JD {jd:.2f} TDB, {_jd_text(jd)}) is outside DE421's span: JD {start:.1f} "
-                         f"to {end:.1f} TDB ({_jd_text(start)} to {_jd_text(end)})")
+        raise ValueError(_outside_span(f"epoch={epoch!r}", jd, start, end))
     return jd1, jd2
 
 
@@ -1051,8 +1077,7 @@ def de421_states(jd1: float, jd2: Any) -> Tuple[Any, Any]:
     jd = jd1 + jd2
     if jd.min() < start or jd.max() > end:
         bad = jd.min() if jd.min() < start else jd.max()
-        raise ValueError(f"JD {bad:.2f} TDB ({_jd_text(bad)}) is outside DE421's span: JD {start:.1f} to {end:.1f} "
-                         f"TDB ({_jd_text(start)} to {_jd_text(end)})")
+        raise ValueError(_outside_span("a time", bad, start, end))
     names = {"Sun": "sun", "Mercury": "mercury", "Venus": "venus", "Mars": "mars", "Jupiter": "jupiter",
              "Saturn": "saturn", "Uranus": "uranus", "Neptune": "neptune", "Pluto": "pluto"}
     pos = np.empty((len(jd2), len(DE421_BODIES), 3))
@@ -1068,6 +1093,17 @@ def de421_states(jd1: float, jd2: Any) -> Tuple[Any, Any]:
         pos[:, i, :] = p.T / AU_KM
         vel[:, i, :] = v.T * 365.25 / AU_KM  # km/day -> AU/yr
     return pos, vel
+
+
+def _gr_switch(gr: Any) -> Optional[bool]:
+    """gr as None, True or False (numpy's bools too); anything else, a
+    string such as "no" among them, is refused rather than read as true."""
+    if gr is None or isinstance(gr, bool):
+        return gr
+    kind = type(gr)
+    if kind.__module__ == "numpy" and kind.__name__ in ("bool_", "bool"):
+        return bool(gr)
+    raise ValueError(f"gr={gr!r} is not True, False or None (None: GR where REBOUNDx is installed)")
 
 
 def solar_system(epoch: Any = 2451545.0, gr: Optional[bool] = None) -> rebound.Simulation:
@@ -1091,6 +1127,7 @@ def solar_system(epoch: Any = 2451545.0, gr: Optional[bool] = None) -> rebound.S
     Needs the ``ephemeris`` extra.
     """
     jd1, jd2 = de421_epoch(epoch)
+    gr = _gr_switch(gr)
     if gr is None:
         gr = _reboundx_installed()
     gm = de421_gm()
@@ -1167,7 +1204,9 @@ class SolarSystem(Scene):
     def __init__(self, epoch: Any = 2451545.0, years: Any = 10.0, every: Any = 10.0, gr: Optional[bool] = None) -> None:
         jd1, jd2 = de421_epoch(epoch)
         self.epoch = jd1 + jd2
-        self.years = _positive(_number(years, "years"), "years")
+        # (years and every: plain numbers in years and days, or times with their units)
+        self.years = _positive(units.to_scene(years, "time", "years") if hasattr(years, "unit")
+                               or isinstance(years, str) else _number(years, "years"), "years", years)
         self.every = _positive(units.to_scene(every, "time", "every") * 365.25 if hasattr(every, "unit")
                                or isinstance(every, str) else _number(every, "every"), "every", every)
         start, end = de421_span()
@@ -1178,6 +1217,7 @@ class SolarSystem(Scene):
         if self.every > self.years * 365.25:
             raise ValueError(f"every={every!r} days is longer than the run ({self.years:g} yr)")
         # (None without REBOUNDx is Newtonian, and the report says how to get GR)
+        gr = _gr_switch(gr)
         self.gr_missing = gr is None and not _reboundx_installed()
         if gr is None:
             gr = not self.gr_missing

@@ -113,6 +113,12 @@ def to_unit(value: Any, kind: str, unit: Any, name: str) -> float:
     u = _u()
     if not getattr(value, "isscalar", True):
         raise ValueError(f"{name}={show(value)} is not a single value; give one quantity")
+    if kind == "frequency" and any("Hz" in getattr(base, "name", "") for base in getattr(value.unit, "bases", ())):
+        # astropy's Hz is 1/s, so that "1 Hz" would become 1 rad/s where a
+        # cycle a second (2 pi rad/s) is almost always meant.
+        raise ValueError(f"{name}={show(value)}: hertz is ambiguous for an angular frequency (astropy reads 1 Hz "
+                         f"as 1 rad/s, not one cycle a second); give rad/s, cycle/s or 1/s "
+                         f"(allowed: {', '.join(ALLOWED['frequency'])}, cycle/...)")
     try:
         # Frequencies may be given in rad/time; radians are dimensionless
         # there (and nowhere else: "1 AU rad" is no length).

@@ -720,3 +720,20 @@ def test_a_setting_checks_its_value_and_options_by_name():
         compare.Setting("pfvi", 1e-6, (("n_steps", 3),))
     with pytest.raises(ValueError, match=r"^options=\('stages', 6\): give \(name, value\) pairs"):
         compare.Setting("pfvi", 1e-6, ("stages", 6))
+
+
+def test_a_warning_without_an_explanation_is_quoted_once():
+    # (a hostile trial: a REBOUNDx warning no entry explained was quoted, then
+    # repeated as its own explanation, ending in "..")
+    from rebound_pfvi.report import warnings_section
+    from rebound_pfvi.runs import Run
+
+    unknown = "Something new happened."
+    rebx = ("REBOUNDx: Passing a velocity-dependent force to WHFAST, will accumulate errors proportional to the "
+            "force. See ipython_examples/IntegrateForce.ipynb.")
+    rows = [Run(kind="compare", scene="s", family="whfast", label="WHFast", knob="steps/period", value=10.0,
+                warnings=[unknown, rebx])]
+    lines = warnings_section(rows).splitlines()
+    assert lines[0] == f'- "{unknown}" (WHFast 10 steps/period).'
+    assert lines[1].startswith(f'- "{rebx}" (WHFast 10 steps/period): REBOUNDx\'s warning that WHFast\'s kick')
+    assert lines[1].count("IntegrateForce") == 1 and not lines[1].endswith("..")

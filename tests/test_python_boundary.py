@@ -238,6 +238,15 @@ def test_units_errors_name_the_argument(call, words):
 
 def test_a_frequency_may_still_be_given_in_radians_per_time():
     assert units.to_scene(2 * math.pi * u.rad / u.yr, "frequency", "omega") == pytest.approx(2 * math.pi)
+    assert units.to_scene(1 * u.cycle / u.yr, "frequency", "omega") == pytest.approx(2 * math.pi)
+
+
+@pytest.mark.parametrize("omega", [1 * u.Hz, 2 * u.kHz, "1 Hz", "3 rad Hz"])
+def test_hertz_is_refused_for_an_angular_frequency(omega):
+    # (a hostile trial: astropy reads 1 Hz as 1/s, so omega = 1 Hz ran at
+    # 1 rad/s, 2 pi slower than a cycle a second, without a word)
+    with pytest.raises(ValueError, match=r"omega=.*: hertz is ambiguous for an angular frequency"):
+        units.to_scene(omega, "frequency", "omega")
 
 
 def test_the_integrator_page_tool_takes_help_for_help(tmp_path, monkeypatch, capsys):

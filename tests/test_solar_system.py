@@ -111,6 +111,45 @@ def test_epoch_outside_de421_names_it_and_the_span(epoch, shown):
 
 
 @needs_ephemeris
+def test_an_epoch_just_past_the_span_says_by_how_much_and_an_mjd_says_what_it_may_be():
+    # (a hostile trial: "JD 2524624.50 TDB, 2200-02-01 is outside DE421's span
+    # ... (1899-12-04 to 2200-02-01)" for a UTC epoch 69 s past the end, and
+    # a year of -4571 cut to "-4571-01-0" for an MJD)
+    from astropy.time import Time
+
+    with pytest.raises(ValueError, match=r"is outside DE421's span, 69.\d s after its end"):
+        scenes.solar_system(Time("2200-02-01", scale="utc"))
+    assert scenes.solar_system(Time("2200-02-01", scale="tdb"), gr=False).N == 11
+    with pytest.raises(ValueError) as error:
+        scenes.solar_system(51544.5)
+    message = str(error.value)
+    assert "-4571-01-09 00:00:00.000" in message and "days before its start" in message
+    assert message.endswith("if it is a Modified Julian Date, the Julian date is 2451545.000000")
+
+
+@needs_ephemeris
+@pytest.mark.parametrize("gr", ["no", "False", 0, 1, 1.0])
+def test_gr_is_true_false_or_none(gr):
+    # (a hostile trial: gr="no" switched GR on, as any true value did)
+    with pytest.raises(ValueError, match=r"gr=.* is not True, False or None"):
+        scenes.solar_system(gr=gr)
+    with pytest.raises(ValueError, match=r"gr=.* is not True, False or None"):
+        scenes.SolarSystem(years=1, gr=gr)
+
+
+@needs_ephemeris
+def test_the_run_length_takes_a_time_as_the_output_interval_does():
+    import astropy.units as u
+
+    assert scenes.SolarSystem(years=0.5 * u.yr, gr=False).years == 0.5
+    assert scenes.SolarSystem(years="730.5 day", gr=False).years == 2.0
+    with pytest.raises(ValueError, match=r"years=1 AU has unit AU, which is not a time"):
+        scenes.SolarSystem(years=1 * u.AU, gr=False)
+    with pytest.raises(ValueError, match=r"years=-1 yr must be positive"):
+        scenes.SolarSystem(years=-1 * u.yr, gr=False)
+
+
+@needs_ephemeris
 @pytest.mark.parametrize("epoch, match", [("yesterday", "not a date astropy can read"), (True, "not an epoch"),
                                           (float("nan"), "not finite"),
                                           (None, r"epoch=None is not an epoch; give an astropy Time, a Julian date "
@@ -240,6 +279,22 @@ def test_cli_epoch_error_names_the_option(capsys):
     assert stop.value.code == 2
     err = capsys.readouterr().err
     assert "argument --epoch: epoch='1700-01-01'" in err and "outside DE421's span" in err
+
+
+@pytest.mark.parametrize("option, text, words", [("--years", "1 AU", "argument --years: 1 AU has unit AU, which is not a time"),
+                                                 ("--every", "five", "argument --every: cannot read 'five' as a quantity"),
+                                                 ("--years", "-2", "argument --years: years=-2.0 must be positive")])
+def test_cli_run_length_and_interval_take_numbers_or_times(capsys, option, text, words):
+    from rebound_pfvi.__main__ import SCENE_OPTIONS, _argument, _number_or_time
+
+    assert SCENE_OPTIONS[option][1] == "number or time"
+    assert _number_or_time("2", "years") == 2.0 and str(_number_or_time("12 h", "every").unit) == "h"
+    if words.endswith("must be positive"):
+        pytest.importorskip("de421")
+    with pytest.raises(SystemExit) as stop:
+        main(["compare", "--scene", "solar-system", option, text])
+    assert stop.value.code != 0
+    assert words in capsys.readouterr().err
 
 
 def _page_snippets():
