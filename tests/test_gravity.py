@@ -2,8 +2,8 @@
 
 Where REBOUND would compute only its basic gravity, pfvi computes the forces
 of every stage of a round in one pass; anything else (an additional force,
-variational particles, ghost boxes, ignored terms, another gravity module)
-goes through REBOUND stage by stage. A callback that adds nothing forces
+variational particles, ignored terms, another gravity module, the ghost
+boxes of a shearing sheet) goes through REBOUND stage by stage. A callback that adds nothing forces
 REBOUND's path without changing the physics, so the two runs must agree bit
 for bit: the same terms summed in the same order.
 """
@@ -101,6 +101,41 @@ def test_own_gravity_with_outputs_and_reversal():
         sim.integrate(0.0)
         return state(sim)
     assert run(False) == run(True)
+
+
+def box(ghosts=(1, 1, 0), N_active=None, testparticle_type=0, boundary="periodic"):
+    def build():
+        sim = rebound.Simulation()
+        sim.root_size = 4.0
+        sim.boundary = boundary
+        if boundary == "shear":
+            sim.OMEGA = 1.0
+        sim.N_ghost_x, sim.N_ghost_y, sim.N_ghost_z = ghosts
+        sim.softening = 0.02
+        for x, y, z, vx, vy in ((1.35, -0.9, 0.1, 0.0, 1.2), (-1.35, 0.9, -0.2, 0.0, -1.2), (0.0, 0.6, 0.0, 0.3, 0.0),
+                                (0.0, 0.9, 0.3, -0.3, 0.0), (1.9, 1.9, 1.8, 0.2, 0.1)):
+            sim.add(m=1e-3, x=x, y=y, z=z, vx=vx, vy=vy)
+        if N_active is not None:
+            sim.N_active = N_active
+            sim.testparticle_type = testparticle_type
+            sim.testparticle_hidewarnings = 1
+        return sim
+    return build
+
+
+@pytest.mark.parametrize("ghosts, N_active, testparticle_type", [((1, 1, 0), None, 0), ((1, 1, 1), None, 0),
+                                                                  ((2, 0, 1), 3, 0), ((1, 1, 1), 3, 1)])
+def test_own_gravity_sums_ghost_boxes_as_rebound_does(ghosts, N_active, testparticle_type):
+    # (a periodic box's images: each box's pairs in REBOUND's order)
+    own, forced = both_paths(box(ghosts, N_active, testparticle_type), 3.0,
+                             lambda sim: setattr(sim.integrator, "epsilon", 1e-8))
+    assert own == forced and own[1] > 5
+
+
+def test_a_shearing_sheet_goes_through_rebound():
+    # (its images move with t, and the stages of a pass are at different times)
+    own, forced = both_paths(box(boundary="shear"), 1.0, lambda sim: setattr(sim.integrator, "epsilon", 1e-8))
+    assert own == forced
 
 
 def test_routes_that_need_rebound_still_work():

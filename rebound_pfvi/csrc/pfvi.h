@@ -1600,7 +1600,8 @@ PFVI_INTERNAL int pfvi_rebound_error_since(const struct reb_simulation* r, struc
 PFVI_INTERNAL void pfvi_error(struct reb_simulation* r, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
 PFVI_INTERNAL void pfvi_warning(struct reb_simulation* r, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
 // pfvi_gravity.c: whether REBOUND's routine would compute only its basic
-// gravity (no additional forces, variations, ghost boxes or ignored terms),
+// gravity (no additional forces, variations, ignored terms or ghost boxes
+// that move with t: a shearing sheet's),
 // which pfvi_gravity_stages then computes at stages k0 .. k1 of positions x
 // into a in one pass, bit for bit as REBOUND would stage by stage; 0 if a
 // force is not finite (a is written all the same).

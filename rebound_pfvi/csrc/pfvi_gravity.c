@@ -12,8 +12,8 @@
  *
  * The arithmetic is REBOUND's reb_gravity_basic_calculate_acceleration
  * (src/gravity.c, the same in 5.0 to 5.2, built without OpenMP) operation
- * for operation: the image shift added to particle i's coordinate, the
- * softened distance, G/r^3, the same pairs (i from 1, j < i, among the
+ * for operation: the ghost boxes in its order, the image shift added to
+ * particle i's coordinate, the softened distance, G/r^3, the same pairs (i from 1, j < i, among the
  * N_active; then each test particle against the active ones, pulling them
  * with testparticle_type 1) in the same order. Each stage's sums therefore
  * add the same terms in the same order as REBOUND's: the accelerations are
@@ -22,8 +22,9 @@
  *
  * Used only where REBOUND's routine would compute nothing else
  * (pfvi_gravity_own): basic gravity, no additional forces (REBOUNDx
- * included), no variational particles, no ghost boxes, no ignored terms.
- * Everything else goes through REBOUND as before.
+ * included), no variational particles, no ignored terms, and ghost boxes
+ * only where their shifts do not depend on time (a periodic box, not a
+ * shearing sheet). Everything else goes through REBOUND as before.
  */
 #include <math.h>
 #include <string.h>
@@ -31,8 +32,11 @@
 #include "boundary.h"
 
 int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
+    // (Ghost boxes whose shifts do not depend on t: a shearing sheet's move
+    // with it, and the stages of a pass are at different times.)
+    const int ghosts = r->N_ghost_x != 0 || r->N_ghost_y != 0 || r->N_ghost_z != 0;
     return r->gravity == REB_GRAVITY_BASIC && r->additional_forces == NULL && r->N_var == 0 && st->var_N == 0
-        && r->gravity_ignore_terms == 0 && r->N_ghost_x == 0 && r->N_ghost_y == 0 && r->N_ghost_z == 0
+        && r->gravity_ignore_terms == 0 && (!ghosts || r->boundary != REB_BOUNDARY_SHEAR)
         && (r->N_active == SIZE_MAX || r->N_active <= N);
 }
 
@@ -96,10 +100,6 @@ int pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, s
     const double G = r->G;
     const double softening2 = r->softening*r->softening;
     const size_t N_active = (r->N_active == SIZE_MAX) ? N : r->N_active;
-    // REBOUND's one ghost box (0, 0, 0) when there are none: a shift of
-    // zero, added all the same (its sign of zero included).
-    const struct reb_vec6d box = reb_boundary_get_ghostbox((struct reb_simulation*)r, 0, 0, 0);
-    const double g[3] = {box.x, box.y, box.z};
     double (*restrict X)[3][LANES] = st->gravity_x;
     double (*restrict A)[3][LANES] = st->gravity_a;
     // Lane l holds stage l; lanes outside k0 .. k1 repeat the nearest
@@ -128,12 +128,23 @@ int pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, s
     // take that block alone.
     const int pull = r->testparticle_type;
     const double (*const Xc)[3][LANES] = (const double (*)[3][LANES])X;
-    if (k1 < 4){
-        all_pairs(ps, N, N_active, pull, Xc, A, G, softening2, g, 0, 4);
-    }else if (k0 >= 4){
-        all_pairs(ps, N, N_active, pull, Xc, A, G, softening2, g, 4, LANES);
-    }else{
-        all_pairs(ps, N, N_active, pull, Xc, A, G, softening2, g, 0, LANES);
+    // REBOUND's ghost boxes in REBOUND's order, each box's pairs in full
+    // before the next (the one box (0, 0, 0) when there are none: a shift
+    // of zero, added all the same, its sign of zero included).
+    for (int gbx=-r->N_ghost_x; gbx<=r->N_ghost_x; gbx++){
+        for (int gby=-r->N_ghost_y; gby<=r->N_ghost_y; gby++){
+            for (int gbz=-r->N_ghost_z; gbz<=r->N_ghost_z; gbz++){
+                const struct reb_vec6d box = reb_boundary_get_ghostbox((struct reb_simulation*)r, gbx, gby, gbz);
+                const double g[3] = {box.x, box.y, box.z};
+                if (k1 < 4){
+                    all_pairs(ps, N, N_active, pull, Xc, A, G, softening2, g, 0, 4);
+                }else if (k0 >= 4){
+                    all_pairs(ps, N, N_active, pull, Xc, A, G, softening2, g, 4, LANES);
+                }else{
+                    all_pairs(ps, N, N_active, pull, Xc, A, G, softening2, g, 0, LANES);
+                }
+            }
+        }
     }
     // Whether every force is finite, as the caller's check of REBOUND's
     // accelerations asks: a - a is 0 for a finite a and NaN otherwise, and a
