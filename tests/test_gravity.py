@@ -1,11 +1,14 @@
 """pfvi's own gravity pass (pfvi_gravity.c) against REBOUND's gravity routine.
 
 Where REBOUND would compute only its basic gravity, pfvi computes the forces
-of every stage of a round in one pass; anything else (an additional force,
-variational particles, ignored terms, another gravity module, the ghost
-boxes of a shearing sheet) goes through REBOUND stage by stage. A callback that adds nothing forces
-REBOUND's path without changing the physics, so the two runs must agree bit
-for bit: the same terms summed in the same order.
+of every stage of a round in one pass; with additional forces (a callback,
+REBOUNDx) that do not depend on velocities it computes the gravity so and
+calls them at each stage beside it; anything else (variational particles,
+ignored terms, another gravity module, the ghost boxes of a shearing sheet,
+velocity-dependent forces) goes through REBOUND stage by stage. A
+variational particle forces REBOUND's path without changing the real
+particles' trajectory, so the two runs must agree bit for bit: the same
+terms summed in the same order.
 """
 import math
 
@@ -27,7 +30,9 @@ def both_paths(build, t_end, configure=None):
         if configure:
             configure(sim)
         if forced:
-            sim.additional_forces = lambda simp: None  # REBOUND's path, the same physics
+            # REBOUND's path, the same physics: a variational particle
+            # (the real trajectory is bit-identical with or without it)
+            sim.add_variation()
         sim.integrate(t_end)
         runs.append((state(sim), sim.integrator.n_steps, sim.integrator.n_force_evaluations))
     return runs
@@ -160,3 +165,24 @@ def test_routes_that_need_rebound_still_work():
         assert math.dist(sim.particles[2].xyz, ref.particles[2].xyz) < 1e-8
         if var is not None:
             assert math.dist(var.particles[2].xyz, rvar.particles[2].xyz) < 1e-6 * math.hypot(*rvar.particles[2].xyz)
+
+
+def j2_like(simp):
+    # (a force of the positions alone, pulling each body toward the plane z = 0)
+    for p in simp.contents.particles[:simp.contents.N]:
+        p.az -= 0.01 * p.z
+
+
+@pytest.mark.parametrize("build", [planets(), planets(N_active=3, testparticle_type=1), box((1, 1, 1))],
+                         ids=["planets", "test particles", "periodic box"])
+def test_additional_forces_beside_the_own_gravity_pass(build):
+    # With a force callback the gravity of a round is pfvi's own pass and the
+    # callback is called at each stage beside it: the same sums and calls as
+    # REBOUND's path, forced by a variational particle.
+    def configure(sim):
+        sim.additional_forces = j2_like
+        sim.integrator.epsilon = 1e-9
+    beside, forced = both_paths(build, 4.0, configure)
+    assert beside == forced and beside[1] > 5
+    plain, _ = both_paths(build, 4.0, lambda sim: setattr(sim.integrator, "epsilon", 1e-9))
+    assert plain[0] != beside[0]   # (the force acted)

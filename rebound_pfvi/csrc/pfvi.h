@@ -1579,6 +1579,9 @@ PFVI_INTERNAL void pfvi_give_up(struct pfvi_state* st, struct pfvi_fault fault);
 // Evaluates forces through REBOUND; 0 (rolled back, fault recorded) if they
 // are not finite or a callback changed N.
 PFVI_INTERNAL int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0);
+// The same with REBOUND's basic gravity already in the particles'
+// accelerations (pfvi_gravity_stages'): only the additional forces are called.
+PFVI_INTERNAL int pfvi_update_additional_forces(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0);
 // Whether the forces run user code (additional_forces, REBOUNDx, custom
 // gravity): code that may edit particles during an evaluation, and whose
 // forces no field of REBOUND's describes.
@@ -1606,6 +1609,10 @@ PFVI_INTERNAL void pfvi_warning(struct reb_simulation* r, const char* fmt, ...) 
 // into a in one pass, bit for bit as REBOUND would stage by stage; 0 if a
 // force is not finite (a is written all the same).
 PFVI_INTERNAL int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st, size_t N);
+// Whether REBOUND's routine would compute its basic gravity and then call
+// additional forces (a force callback, REBOUNDx's): the gravity can be
+// pfvi_gravity_stages', the forces called at each stage beside it.
+PFVI_INTERNAL int pfvi_gravity_own_beside_forces(const struct reb_simulation* r, const struct pfvi_state* st, size_t N);
 PFVI_INTERNAL int pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
         const double (*x)[PFVI_STAGES_MAX][3], double (*a)[PFVI_STAGES_MAX][3], int k0, int k1);
 PFVI_INTERNAL void pfvi_track_added(struct pfvi_state* st);

@@ -20,24 +20,37 @@
  * bit for bit REBOUND's, and so is every trajectory (tests/test_gravity.py
  * compares them with the REBOUND path forced).
  *
- * Used only where REBOUND's routine would compute nothing else
- * (pfvi_gravity_own): basic gravity, no additional forces (REBOUNDx
- * included), no variational particles, no ignored terms, and ghost boxes
- * only where their shifts do not depend on time (a periodic box, not a
- * shearing sheet). Everything else goes through REBOUND as before.
+ * Used where REBOUND's routine would compute its basic gravity (no
+ * variational particles, no ignored terms, ghost boxes only where their
+ * shifts do not depend on time: a periodic box, not a shearing sheet):
+ * alone (pfvi_gravity_own), or beside additional forces that do not depend
+ * on velocities (pfvi_gravity_own_beside_forces: a callback, REBOUNDx's),
+ * which are then called at each stage with the particles there and this
+ * gravity in their accelerations, as REBOUND's routine would call them.
+ * Everything else goes through REBOUND as before.
  */
 #include <math.h>
 #include <string.h>
 #include "pfvi.h"
 #include "boundary.h"
 
-int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
+// REBOUND's update of the accelerations would compute its basic gravity (and
+// nothing else for the particles, whatever else it calls after it).
+static int basic_gravity(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
     // (Ghost boxes whose shifts do not depend on t: a shearing sheet's move
     // with it, and the stages of a pass are at different times.)
     const int ghosts = r->N_ghost_x != 0 || r->N_ghost_y != 0 || r->N_ghost_z != 0;
-    return r->gravity == REB_GRAVITY_BASIC && r->additional_forces == NULL && r->N_var == 0 && st->var_N == 0
+    return r->gravity == REB_GRAVITY_BASIC && r->N_var == 0 && st->var_N == 0
         && r->gravity_ignore_terms == 0 && (!ghosts || r->boundary != REB_BOUNDARY_SHEAR)
         && (r->N_active == SIZE_MAX || r->N_active <= N);
+}
+
+int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
+    return basic_gravity(r, st, N) && r->additional_forces == NULL;
+}
+
+int pfvi_gravity_own_beside_forces(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
+    return basic_gravity(r, st, N) && r->additional_forces != NULL;
 }
 
 #define LANES PFVI_STAGES_MAX

@@ -227,8 +227,8 @@ static void stage_velocity_times_h(const struct pfvi_stage_fit* f, const struct 
 // (pfvi_gravity.c) into stage_a, and the particles and t left as REBOUND's
 // trips leave them (at stage k_last). 0 where a force is not finite: the
 // caller then takes REBOUND's path, which names the cause and rolls back.
-static int stage_forces_own(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
-        int k_first, int k_last){
+// Every real particle's stage points k_first .. k_last of the iterate into stage_x.
+static void stage_points(struct pfvi_state* st, size_t N, int k_first, int k_last){
     const int s = st->rule.s;
     for (size_t i=0; i<N; i++){
         const double (*y)[3] = (const double (*)[3])st->unknowns[i];
@@ -256,6 +256,11 @@ static int stage_forces_own(struct reb_simulation* r, struct pfvi_state* st, siz
                     st->stage_x[i][k]);
         }
     }
+}
+
+static int stage_forces_own(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
+        int k_first, int k_last){
+    stage_points(st, N, k_first, k_last);
     // (finite: pfvi_update_acceleration's check, made in the gravity's lanes)
     if (!pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a,
             k_first, k_last)){
@@ -270,6 +275,42 @@ static int stage_forces_own(struct reb_simulation* r, struct pfvi_state* st, siz
         ps[i].ax = a[0]; ps[i].ay = a[1]; ps[i].az = a[2];
     }
     r->t = t0 + st->rule.c[k_last]*h;
+    return 1;
+}
+
+// stage_forces where REBOUND would compute its basic gravity and then call
+// additional forces (not depending on velocities): the gravity of every
+// stage in one pass, as stage_forces_own, and at each stage the particles
+// placed there with that gravity as their accelerations, as REBOUND's
+// routine leaves them, and the additional forces called: the same calls,
+// arguments and sums as REBOUND's path. 1 done; 0 failed (rolled back,
+// pfvi_update_acceleration's checks); -1 a gravity not finite, nothing done
+// (REBOUND's path then names the cause).
+static int stage_forces_beside(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
+        int k_first, int k_last){
+    stage_points(st, N, k_first, k_last);
+    if (!pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a,
+            k_first, k_last)){
+        return -1;
+    }
+    struct reb_particle* const ps = r->particles;
+    for (int k=k_first; k<=k_last; k++){
+        for (size_t i=0; i<N; i++){
+            const double* const x = st->stage_x[i][k];
+            const double* const a = st->stage_a[i][k];
+            ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
+            ps[i].ax = a[0]; ps[i].ay = a[1]; ps[i].az = a[2];
+        }
+        r->t = t0 + st->rule.c[k]*h;
+        if (!pfvi_update_additional_forces(r, st, N, t0)){
+            return 0;
+        }
+        for (size_t i=0; i<N; i++){
+            st->stage_a[i][k][0] = ps[i].ax;
+            st->stage_a[i][k][1] = ps[i].ay;
+            st->stage_a[i][k][2] = ps[i].az;
+        }
+    }
     return 1;
 }
 
@@ -290,6 +331,12 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
     const size_t nv = st->var_N;
     if (real && !vdep && pfvi_gravity_own(r, st, N) && stage_forces_own(r, st, N, t0, h, k_first, k_last)){
         return 1;
+    }
+    if (real && !vdep && pfvi_gravity_own_beside_forces(r, st, N)){
+        const int done = stage_forces_beside(r, st, N, t0, h, k_first, k_last);
+        if (done >= 0){
+            return done;
+        }
     }
     if (vdep){
         // The stage velocities of the current iterate, from the forces that

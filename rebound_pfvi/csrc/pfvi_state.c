@@ -823,7 +823,11 @@ int pfvi_forces_run_user_code(const struct reb_simulation* r){
     return r->additional_forces != NULL || r->gravity == REB_GRAVITY_CUSTOM;
 }
 
-int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
+// REBOUND's update of the accelerations, or with gravity_given (the basic
+// gravity already in the particles' accelerations, as REBOUND's routine would
+// leave it: pfvi_gravity_stages) the rest of that update, the additional
+// forces; then the checks of what the forces did.
+static int update_forces(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, int gravity_given){
     // Only user code (a force callback, custom gravity) can edit particles
     // during an evaluation; REBOUND's own gravity does not.
     const int guarded = pfvi_forces_run_user_code(r);
@@ -832,7 +836,11 @@ int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, si
         written_keep(r, st, N);
     }
     const struct pfvi_error_mark errors = pfvi_rebound_errors(r);
-    reb_simulation_update_acceleration(r);
+    if (gravity_given){
+        r->additional_forces(r);
+    }else{
+        reb_simulation_update_acceleration(r);
+    }
     st->statistics.n_force_evaluations++;
     if (st->reentry_refused){
         r->status = (enum REB_STATUS)st->status_at_start;
@@ -896,6 +904,14 @@ int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, si
         }
     }
     return 1;
+}
+
+int pfvi_update_acceleration(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
+    return update_forces(r, st, N, t0, 0);
+}
+
+int pfvi_update_additional_forces(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0){
+    return update_forces(r, st, N, t0, 1);
 }
 
 // The stopping rule of IRKGL16 (Antonana, Makazaga & Murua 2017): iterate
