@@ -2,10 +2,10 @@
 
 Where REBOUND would compute only its basic gravity, pfvi computes the forces
 of every stage of a round in one pass; with additional forces (a callback,
-REBOUNDx) that do not depend on velocities it computes the gravity so and
-calls them at each stage beside it; anything else (variational particles,
-ignored terms, another gravity module, the ghost boxes of a shearing sheet,
-velocity-dependent forces) goes through REBOUND stage by stage. A
+REBOUNDx) it computes the gravity so and calls them at each stage beside
+it; anything else (variational particles, ignored terms, another gravity
+module, the ghost boxes of a shearing sheet) goes through REBOUND stage by
+stage. A
 variational particle forces REBOUND's path without changing the real
 particles' trajectory, so the two runs must agree bit for bit: the same
 terms summed in the same order.
@@ -186,3 +186,34 @@ def test_additional_forces_beside_the_own_gravity_pass(build):
     assert beside == forced and beside[1] > 5
     plain, _ = both_paths(build, 4.0, lambda sim: setattr(sim.integrator, "epsilon", 1e-9))
     assert plain[0] != beside[0]   # (the force acted)
+
+
+def test_a_velocity_dependent_force_sees_reboundss_gravity_at_every_stage():
+    # With a force of velocities too (a drag here, REBOUNDx's gr in use) the
+    # gravity it is called beside is the own pass's: at every stage the
+    # accelerations it finds are those REBOUND's routine computes for the
+    # same positions, bit for bit (a twin simulation, REBOUND's update).
+    import ctypes
+
+    twin = planets(softening=0.01, N_active=3, testparticle_type=1)()
+    seen = {"calls": 0, "differ": 0}
+
+    def drag(simp):
+        sim = simp.contents
+        ps = sim.particles
+        for i in range(sim.N):
+            twin.particles[i].x, twin.particles[i].y, twin.particles[i].z = ps[i].x, ps[i].y, ps[i].z
+        rebound.clibrebound.reb_simulation_update_acceleration(ctypes.byref(twin))
+        seen["calls"] += 1
+        seen["differ"] += sum((ps[i].ax, ps[i].ay, ps[i].az) != (twin.particles[i].ax, twin.particles[i].ay,
+                                                                 twin.particles[i].az) for i in range(sim.N))
+        for i in range(1, sim.N):
+            ps[i].ax -= 0.01 * ps[i].vx
+            ps[i].ay -= 0.01 * ps[i].vy
+
+    sim = planets(softening=0.01, N_active=3, testparticle_type=1)()
+    sim.integrator = "pfvi"
+    sim.additional_forces = drag
+    sim.force_is_velocity_dependent = 1
+    sim.integrate(3.0)
+    assert seen["calls"] > 100 and seen["differ"] == 0

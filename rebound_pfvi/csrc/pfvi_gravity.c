@@ -23,10 +23,10 @@
  * Used where REBOUND's routine would compute its basic gravity (no
  * variational particles, no ignored terms, ghost boxes only where their
  * shifts do not depend on time: a periodic box, not a shearing sheet):
- * alone (pfvi_gravity_own), or beside additional forces that do not depend
- * on velocities (pfvi_gravity_own_beside_forces: a callback, REBOUNDx's),
- * which are then called at each stage with the particles there and this
- * gravity in their accelerations, as REBOUND's routine would call them.
+ * alone (pfvi_gravity_own), or beside additional forces
+ * (pfvi_gravity_own_beside_forces: a callback, REBOUNDx's, velocity-dependent
+ * or not), which are then called at each stage with the particles there and
+ * this gravity in their accelerations, as REBOUND's routine would call them.
  * Everything else goes through REBOUND as before.
  */
 #include <math.h>

@@ -278,42 +278,6 @@ static int stage_forces_own(struct reb_simulation* r, struct pfvi_state* st, siz
     return 1;
 }
 
-// stage_forces where REBOUND would compute its basic gravity and then call
-// additional forces (not depending on velocities): the gravity of every
-// stage in one pass, as stage_forces_own, and at each stage the particles
-// placed there with that gravity as their accelerations, as REBOUND's
-// routine leaves them, and the additional forces called: the same calls,
-// arguments and sums as REBOUND's path. 1 done; 0 failed (rolled back,
-// pfvi_update_acceleration's checks); -1 a gravity not finite, nothing done
-// (REBOUND's path then names the cause).
-static int stage_forces_beside(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
-        int k_first, int k_last){
-    stage_points(st, N, k_first, k_last);
-    if (!pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a,
-            k_first, k_last)){
-        return -1;
-    }
-    struct reb_particle* const ps = r->particles;
-    for (int k=k_first; k<=k_last; k++){
-        for (size_t i=0; i<N; i++){
-            const double* const x = st->stage_x[i][k];
-            const double* const a = st->stage_a[i][k];
-            ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
-            ps[i].ax = a[0]; ps[i].ay = a[1]; ps[i].az = a[2];
-        }
-        r->t = t0 + st->rule.c[k]*h;
-        if (!pfvi_update_additional_forces(r, st, N, t0)){
-            return 0;
-        }
-        for (size_t i=0; i<N; i++){
-            st->stage_a[i][k][0] = ps[i].ax;
-            st->stage_a[i][k][1] = ps[i].ay;
-            st->stage_a[i][k][2] = ps[i].az;
-        }
-    }
-    return 1;
-}
-
 // Evaluates the forces at every stage point of the current iterate (and at
 // the first node too when forces depend on velocities, since its velocity is
 // the interpolant's, not v_k). Returns 0, rolled back, on a failure.
@@ -332,12 +296,6 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
     if (real && !vdep && pfvi_gravity_own(r, st, N) && stage_forces_own(r, st, N, t0, h, k_first, k_last)){
         return 1;
     }
-    if (real && !vdep && pfvi_gravity_own_beside_forces(r, st, N)){
-        const int done = stage_forces_beside(r, st, N, t0, h, k_first, k_last);
-        if (done >= 0){
-            return done;
-        }
-    }
     if (vdep){
         // The stage velocities of the current iterate, from the forces that
         // made it (stage_a, overwritten below).
@@ -352,7 +310,18 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
             }
         }
     }
-    for (int k=(vdep && k_first <= 1) ? 0 : k_first; k<=k_last; k++){
+    const int k_start = (vdep && k_first <= 1) ? 0 : k_first;
+    // Where REBOUND's routine would compute its basic gravity before the
+    // additional forces (a callback, REBOUNDx's), that gravity at every
+    // stage in one pass, and at each stage the particles placed there with
+    // it in their accelerations, as the routine leaves them, and the
+    // additional forces called: the same calls and sums as REBOUND's. (A
+    // gravity not finite: REBOUND's routine, which names the cause. The
+    // stage forces the velocities above came from are read by then.)
+    const int given = real && nv == 0 && pfvi_gravity_own_beside_forces(r, st, N)
+        && (stage_points(st, N, k_start, k_last), pfvi_gravity_stages(r, st, N,
+            (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a, k_start, k_last));
+    for (int k=k_start; k<=k_last; k++){
         for (size_t v=0; v<nv; v++){
             double x[3];
             stage_position(&st->stage_fit[st->var_real[v]], &st->var_stage_start[v], &var_compensation, NULL,
@@ -379,8 +348,11 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
                 ps[i].vz = pfvi_centre_velocity(centre, t, 2) + qd[2]/h;
             }
         }
+        for (size_t i=0; given && i<N; i++){
+            ps[i].ax = st->stage_a[i][k][0]; ps[i].ay = st->stage_a[i][k][1]; ps[i].az = st->stage_a[i][k][2];
+        }
         r->t = t0 + rule->c[k]*h;
-        if (!pfvi_update_acceleration(r, st, N, t0)){
+        if (!(given ? pfvi_update_additional_forces(r, st, N, t0) : pfvi_update_acceleration(r, st, N, t0))){
             return 0;
         }
         for (size_t v=0; v<nv; v++){
