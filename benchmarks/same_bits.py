@@ -2,7 +2,8 @@
 runs as users make them (pages' scenes, flybys, retrograde crossings,
 binaries with planets, test particles of both types, softening, the
 two-point and s-point schemes with every fitting, the seed and reversible
-step controls, outputs, a reversal, contacts, MEGNO), each run by both builds in
+step controls, outputs, a reversal, contacts, MEGNO, force callbacks of
+positions and of velocities, REBOUNDx's gr and gr_potential), each run by both builds in
 child processes; prints each run's verdict (same bits, or the largest
 coordinate difference) and the count.
 
@@ -88,6 +89,29 @@ elif name == "contacts":
 elif name == "megno":
     planets(sim)
     times = ["megno", 20.0]
+elif name in ("pull", "drag"):
+    # A force callback of positions alone, and one of velocities too
+    # (called beside pfvi's own gravity pass at each stage).
+    planets(sim)
+    def force(simp, drag=(name == "drag")):
+        ps = simp.contents.particles
+        for i in range(1, simp.contents.N):
+            if drag:
+                ps[i].ax -= 0.02 * ps[i].vx
+                ps[i].ay -= 0.02 * ps[i].vy
+            else:
+                ps[i].az -= 0.05 * ps[i].z
+    sim.additional_forces = force
+    sim.force_is_velocity_dependent = int(name == "drag")
+    times = [12.0]
+elif name.startswith("reboundx-"):
+    import reboundx
+    planets(sim)
+    extras = reboundx.Extras(sim)
+    effect = extras.load_force(name[9:])
+    extras.add_force(effect)
+    effect.params["c"] = 30.0   # (strong, so that it shows in the last bits)
+    times = [12.0]
 sim.move_to_com()
 sim.integrator = "pfvi"
 if name.startswith("stages"):
@@ -118,7 +142,7 @@ RUNS = (["scene:" + s for s in ("kepler", "comet", "triple", "jupiter-comet", "r
         + [f"stages{s}-{f}" for s in (3, 4, 6, 8) for f in ("none", "phase", "exact")]
         + [f"stages2-{f}" for f in ("none", "phase", "exact", "phase-literal")]   # the two-point scheme
         + ["stages5-phase-literal", "stages7-none", "seed-control", "reversible-control"]
-        + ["outputs", "reversal", "contacts", "megno"])
+        + ["outputs", "reversal", "contacts", "megno", "pull", "drag", "reboundx-gr", "reboundx-gr_potential"])
 
 
 def run(prefix, name):
