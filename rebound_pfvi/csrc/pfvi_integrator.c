@@ -443,12 +443,14 @@ static const struct reb_binarydata_field_descriptor pfvi_field_descriptor_list[]
         "or omega exceeded " PFVI_STR(PFVI_OMEGA_MAX) " (omega^2 beyond the doubles) and the particle "
         "was stepped unfitted.",
         REB_UINT64, n_u_limited),
-    PFVI_STATISTIC("force evaluations (calls of reb_simulation_update_acceleration). A step "
+    PFVI_STATISTIC("force evaluations (the forces at one point of a step: REBOUND's "
+        "reb_simulation_update_acceleration, or where that would compute REBOUND's basic gravity, the same "
+        "gravity from pfvi's own pass over every stage and the additional forces called beside it). A step "
         "reuses the last step's end acceleration only within one integrate() or steps() call, with no "
         "heartbeat or timestep hook set, no ODE beside a force callback, and nothing the force reads "
         "changed (particles, t, G, softening, N_active, "
-        "testparticle_type, gravity mode, boundary, additional_forces, extras); otherwise it evaluates "
-        "it afresh.",
+        "testparticle_type, gravity mode, boundary, additional_forces, extras); otherwise it "
+        "evaluates it afresh.",
         REB_UINT64, n_force_evaluations),
     PFVI_STATISTIC("iterations of the stage solve, summed over steps (1 per two-point step).",
         REB_UINT64, n_iterations),
