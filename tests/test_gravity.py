@@ -217,3 +217,38 @@ def test_a_velocity_dependent_force_sees_reboundss_gravity_at_every_stage():
     sim.force_is_velocity_dependent = 1
     sim.integrate(3.0)
     assert seen["calls"] > 100 and seen["differ"] == 0
+
+
+def test_ignored_terms_switched_in_a_callback_are_rebounds_from_the_next_stage():
+    # REBOUND's gravity_ignore_terms is outside the force model pfvi holds
+    # for a step: switched by a callback, the next stage's forces come from
+    # REBOUND's routine with it, as before the gravity pass took up the
+    # callbacks (a hostile trial: the rest of the round kept the 0-1 term).
+    import ctypes
+
+    sim = planets()()
+    twin = planets()()
+    twin.gravity_ignore = 1
+    seen = {"calls": 0, "checked": 0, "differ": 0}
+
+    def force(simp):
+        s = simp.contents
+        seen["calls"] += 1
+        if seen["calls"] == 2:
+            s.gravity_ignore = 1
+        elif seen["calls"] in (3, 4, 5):
+            for i in range(s.N):
+                twin.particles[i].x, twin.particles[i].y, twin.particles[i].z = (s.particles[i].x, s.particles[i].y,
+                                                                                 s.particles[i].z)
+            rebound.clibrebound.reb_simulation_update_acceleration(ctypes.byref(twin))
+            seen["checked"] += 1
+            seen["differ"] += sum((s.particles[i].ax, s.particles[i].ay) != (twin.particles[i].ax, twin.particles[i].ay)
+                                  for i in range(s.N))
+
+    sim.integrator = "pfvi"
+    sim.integrator.stages = 8
+    sim.integrator.epsilon = 0.0
+    sim.dt = 0.05
+    sim.additional_forces = force
+    sim.steps(1)
+    assert seen["checked"] == 3 and seen["differ"] == 0

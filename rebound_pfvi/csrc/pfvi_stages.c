@@ -348,11 +348,15 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
                 ps[i].vz = pfvi_centre_velocity(centre, t, 2) + qd[2]/h;
             }
         }
-        for (size_t i=0; given && i<N; i++){
+        // (A callback may have changed what REBOUND's routine computes, past
+        // what the step's force model keeps: REBOUND's gravity_ignore_terms.
+        // From then on, its routine, as before.)
+        const int gravity_given = given && pfvi_gravity_own_beside_forces(r, st, N);
+        for (size_t i=0; gravity_given && i<N; i++){
             ps[i].ax = st->stage_a[i][k][0]; ps[i].ay = st->stage_a[i][k][1]; ps[i].az = st->stage_a[i][k][2];
         }
         r->t = t0 + rule->c[k]*h;
-        if (!(given ? pfvi_update_additional_forces(r, st, N, t0) : pfvi_update_acceleration(r, st, N, t0))){
+        if (!(gravity_given ? pfvi_update_additional_forces(r, st, N, t0) : pfvi_update_acceleration(r, st, N, t0))){
             return 0;
         }
         for (size_t v=0; v<nv; v++){
