@@ -318,9 +318,12 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
     // additional forces called: the same calls and sums as REBOUND's. (A
     // gravity not finite: REBOUND's routine, which names the cause. The
     // stage forces the velocities above came from are read by then.)
-    const int given = real && nv == 0 && pfvi_gravity_own_beside_forces(r, st, N)
-        && (stage_points(st, N, k_start, k_last), pfvi_gravity_stages(r, st, N,
-            (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a, k_start, k_last));
+    int given = 0;
+    if (real && nv == 0 && pfvi_gravity_own_beside_forces(r, st, N)){
+        stage_points(st, N, k_start, k_last);
+        given = pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a,
+            k_start, k_last);
+    }
     for (int k=k_start; k<=k_last; k++){
         for (size_t v=0; v<nv; v++){
             double x[3];
