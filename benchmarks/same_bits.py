@@ -2,7 +2,8 @@
 runs as users make them (pages' scenes, flybys, retrograde crossings,
 binaries with planets, test particles of both types, softening, the
 two-point and s-point schemes with every fitting, the seed and reversible
-step controls, outputs, a reversal, contacts, MEGNO, force callbacks of
+step controls, outputs, a reversal, contacts, MEGNO and variational
+particles (the variational particles' states compared too), force callbacks of
 positions and of velocities, REBOUNDx's gr and gr_potential), each run by both builds in
 child processes; prints each run's verdict (same bits, or the largest
 coordinate difference) and the count.
@@ -90,6 +91,16 @@ elif name == "contacts":
 elif name == "megno":
     planets(sim)
     times = ["megno", 20.0]
+elif name in ("variations", "variations-testparticles", "variation-of-one"):
+    # Two variations of every particle (one varying a mass), over a
+    # reversal; with test particles pulling; a test particle's variation.
+    planets(sim)
+    if name.endswith("testparticles"):
+        sim.add(m=1e-8, a=1.6, e=0.6, inc=2.7, f=1.0)
+        sim.N_active = 3
+        sim.testparticle_type = 1
+        sim.testparticle_hidewarnings = 1
+    times = [name.split("-")[0], 15.0, "flip", 3.0]
 elif name in ("pull", "drag"):
     # A force callback of positions alone, and one of velocities too
     # (called beside pfvi's own gravity pass at each stage).
@@ -127,11 +138,19 @@ for t in times:
         sim.dt *= -1
     elif t == "megno":
         sim.init_megno(seed=1)  # (its deviation vectors are random otherwise)
+    elif t == "variations":
+        var = sim.add_variation()
+        var.particles[1].x, var.particles[2].vy, var.particles[1].m = 1e-3, 1e-4, 1e-5
+        sim.add_variation().particles[2].z = 1e-6
+    elif t == "variation":
+        sim.add_variation(testparticle=1).particles[0].vx = 1e-5
     else:
         sim.integrate(t)
 state = [[p.x, p.y, p.z, p.vx, p.vy, p.vz, p.m] for p in sim.particles] + [[sim.t, sim.integrator.n_steps]]
 if name == "megno":
     state.append([sim.megno()])
+ps_var = sim._particles_var
+state += [[ps_var[i].x, ps_var[i].y, ps_var[i].z, ps_var[i].vx, ps_var[i].vy, ps_var[i].vz] for i in range(sim.N_var)]
 print(json.dumps(state))
 """
 
@@ -143,7 +162,8 @@ RUNS = (["scene:" + s for s in ("kepler", "comet", "triple", "jupiter-comet", "r
         + [f"stages{s}-{f}" for s in (3, 4, 6, 8) for f in ("none", "phase", "exact")]
         + [f"stages2-{f}" for f in ("none", "phase", "exact", "phase-literal")]   # the two-point scheme
         + ["stages5-phase-literal", "stages7-none", "seed-control", "reversible-control"]
-        + ["outputs", "reversal", "contacts", "megno", "pull", "drag"]
+        + ["outputs", "reversal", "contacts", "megno", "variations", "variations-testparticles",
+           "variation-of-one", "pull", "drag"]
         # (REBOUNDx's forces where it is installed: an optional extra)
         + (["reboundx-gr", "reboundx-gr_potential"] if importlib.util.find_spec("reboundx") else []))
 

@@ -5,6 +5,7 @@ category.
     python -P benchmarks/step_budget.py [--sizes 2,3,11,101,1001] [--integrators pfvi,ias15,bs]
                                         [--baseline "PYTHONPATH=... python3"] [--output docs/step-budget.md]
     python -P benchmarks/step_budget.py --phases [--sizes 2,3,11]
+    python -P benchmarks/step_budget.py --megno [--sizes 2,3,11] [--integrators pfvi,ias15] [--wall R ...]
 
 Each (system, integrator) runs in a child process under
 `valgrind --tool=callgrind --collect-atstart=no --toggle-collect=reb_simulation_step`,
@@ -53,6 +54,9 @@ step: time scales and the resolution check; the rest of the trial and of
 the solve; what lies outside the control). It says what a cheaper round
 can buy at most.
 
+--megno: every system with sim.init_megno(seed=1), N variational particles
+beside the N real ones (with --wall too).
+
 --wall R: instead of counting, times pfvi's steps on the same systems (CPU
 time of sim.steps, no valgrind) for this build and the --baseline build,
 interleaved, best of R each, and prints the ratio: the wall-time judge of a
@@ -85,8 +89,10 @@ else:
     for k in range(n - 1):
         sim.add(m=1e-6, a=1.0 + 0.05 * k, e=0.05, inc=0.01 * (k % 7), f=2.1 * k)
 sim.move_to_com()
+if "megno" in sys.argv[4:]:
+    sim.init_megno(seed=1)   # (N variational particles beside the N real ones)
 sim.integrator = integrator
-if len(sys.argv) > 4:   # timing: one step first (setup), then the steps timed
+if "time" in sys.argv[4:]:   # timing: one step first (setup), then the steps timed
     import time
     sim.steps(1)
     t = time.process_time()
@@ -105,7 +111,7 @@ CATEGORIES = ("gravity", "force interface", "solve / method", "predictor", "cont
 
 FORCE_INTERFACE = {"pfvi_update_acceleration", "force_model_unchanged", "written_keep", "written_changed",
                    "stage_forces", "stage_solve_forces", "reb_simulation_update_acceleration",
-                   "stage_forces_own"}
+                   "stage_forces_own", "stage_forces_own_variational"}
 PREDICTOR = {"pfvi_solve_predict", "predict_body", "kepler_start", "kepler_drift", "kepler_pull", "stumpff",
              "rest_weights_of", "rest_integral", "stage_predict", "pfvi_lagrange_at", "centre_start"}
 LIBM_PREDICTOR = ("sin", "cos", "sincos")
@@ -142,7 +148,7 @@ def category(file, function):
 LINE = re.compile(r"^\s*([\d,]+)\s+(?:\([^)]*\)\s+)?(\S.*?):(\S+)(?:\s+\[.*\])?\s*$")
 
 
-def count(prefix, n, integrator, steps, workdir):
+def count(prefix, n, integrator, steps, workdir, flags=()):
     out = os.path.join(workdir, f"cg.{n}.{integrator}.{abs(hash(tuple(prefix))) % 10**6}")
     script = os.path.join(workdir, "child.py")
     with open(script, "w") as f:
@@ -154,7 +160,7 @@ def count(prefix, n, integrator, steps, workdir):
                           capture_output=True, text=True, check=True).stdout.strip()
     cmd = ["env"] + env_words + ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
                                  "--collect-atstart=no", "--toggle-collect=reb_simulation_step",
-                                 real, "-P", script, str(n), integrator, str(steps)]
+                                 real, "-P", script, str(n), integrator, str(steps), *flags]
     run = subprocess.run(cmd, capture_output=True, text=True)
     if run.returncode != 0 or "STEPS" not in run.stdout:
         raise RuntimeError(f"child failed ({n}, {integrator}): {run.stderr[-2000:]}")
@@ -235,14 +241,15 @@ def phase_table(rows):
     return "\n".join(lines)
 
 
-def wall(prefixes, n, repeats, workdir):
+def wall(prefixes, n, repeats, workdir, flags=()):
     script = os.path.join(workdir, "child.py")
     with open(script, "w") as f:
         f.write(CHILD)
     best = [float("inf")] * len(prefixes)
     for _ in range(repeats):
         for k, prefix in enumerate(prefixes):
-            out = subprocess.run(["env"] + prefix + ["-P", script, str(n), "pfvi", str(WALL_STEPS[n]), "time"],
+            out = subprocess.run(["env"] + prefix + ["-P", script, str(n), "pfvi", str(WALL_STEPS[n]), "time",
+                                                      *flags],
                                  capture_output=True, text=True, check=True).stdout
             ns = float(out.split("NS")[1].split()[0])
             best[k] = min(best[k], ns)
@@ -269,7 +276,10 @@ def main():
     parser.add_argument("--wall", type=int, default=0, metavar="R",
                         help="time pfvi against --baseline instead (interleaved, best of R)")
     parser.add_argument("--phases", action="store_true", help="pfvi's step by the phases of its algorithm")
+    parser.add_argument("--megno", action="store_true",
+                        help="each system with init_megno(): N variational particles beside the N real ones")
     args = parser.parse_args()
+    flags = ("megno",) if args.megno else ()
     if args.phases:
         if shutil.which("valgrind") is None:
             sys.exit("step_budget: needs valgrind (apt-get install valgrind)")
@@ -284,7 +294,7 @@ def main():
         lines = ["| N | this build: ns/step | baseline: ns/step | ratio |", "|---|---|---|---|"]
         with tempfile.TemporaryDirectory() as workdir:
             for n in [int(x) for x in args.sizes.split(",")]:
-                this, base = wall([[sys.executable], shlex.split(args.baseline)], n, args.wall, workdir)
+                this, base = wall([[sys.executable], shlex.split(args.baseline)], n, args.wall, workdir, flags)
                 lines.append(f"| {n} | {this:,.0f} | {base:,.0f} | {this / base:.2f} |")
                 print(lines[-1], file=sys.stderr)
         print("\n".join(lines))
@@ -296,11 +306,11 @@ def main():
     with tempfile.TemporaryDirectory() as workdir:
         for n in sizes:
             for integrator in args.integrators.split(","):
-                rows.append((n, integrator, count([sys.executable], n, integrator, STEPS[n], workdir)))
+                rows.append((n, integrator, count([sys.executable], n, integrator, STEPS[n], workdir, flags)))
                 print(f"N = {n} {integrator}: {sum(rows[-1][2].values()) / 1e3:,.1f}k", file=sys.stderr)
                 if args.baseline and integrator == "pfvi":
                     rows.append((n, "pfvi (baseline)", count(shlex.split(args.baseline), n, "pfvi", STEPS[n],
-                                                              workdir)))
+                                                              workdir, flags)))
                     print(f"N = {n} baseline: {sum(rows[-1][2].values()) / 1e3:,.1f}k", file=sys.stderr)
     text = table(rows)
     print(text)

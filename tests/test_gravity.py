@@ -3,12 +3,13 @@
 Where REBOUND would compute only its basic gravity, pfvi computes the forces
 of every stage of a round in one pass; with additional forces (a callback,
 REBOUNDx) it computes the gravity so and calls them at each stage beside
-it; anything else (variational particles, ignored terms, another gravity
-module, the ghost boxes of a shearing sheet) goes through REBOUND stage by
-stage. A
-variational particle forces REBOUND's path without changing the real
-particles' trajectory, so the two runs must agree bit for bit: the same
-terms summed in the same order.
+it; variational particles of first order, each a variation of every
+particle (MEGNO's, add_variation()'s), get REBOUND's variational gravity in
+the same pass's way; anything else (a test particle's variation, ignored
+terms, another gravity module, the ghost boxes of a shearing sheet) goes
+through REBOUND stage by stage. A test particle's variation forces
+REBOUND's path without changing the real particles' trajectory, so the two
+runs must agree bit for bit: the same terms summed in the same order.
 """
 import math
 
@@ -30,9 +31,9 @@ def both_paths(build, t_end, configure=None):
         if configure:
             configure(sim)
         if forced:
-            # REBOUND's path, the same physics: a variational particle
+            # REBOUND's path, the same physics: a test particle's variation
             # (the real trajectory is bit-identical with or without it)
-            sim.add_variation()
+            sim.add_variation(testparticle=1)
         sim.integrate(t_end)
         runs.append((state(sim), sim.integrator.n_steps, sim.integrator.n_force_evaluations))
     return runs
@@ -144,8 +145,8 @@ def test_a_shearing_sheet_goes_through_rebound():
 
 
 def test_routes_that_need_rebound_still_work():
-    """Variational particles and the compensated gravity module go through
-    REBOUND's routine: the runs end where IAS15's do."""
+    """A test particle's variation and the compensated gravity module go
+    through REBOUND's routine: the runs end where IAS15's do."""
     def run(integrator, gravity):
         sim = planets()()
         sim.gravity = gravity
@@ -154,9 +155,9 @@ def test_routes_that_need_rebound_still_work():
             sim.integrator.epsilon = 1e-11
         else:
             sim.integrator.epsilon = 1e-10
-        var = sim.add_variation() if gravity == "basic" else None
+        var = sim.add_variation(testparticle=2) if gravity == "basic" else None
         if var is not None:
-            var.particles[1].x = 1.0
+            var.particles[0].x = 1.0
         sim.integrate(5.0)
         return sim, var
     for gravity in ("basic", "compensated"):
@@ -164,7 +165,54 @@ def test_routes_that_need_rebound_still_work():
         ref, rvar = run("ias15", gravity)
         assert math.dist(sim.particles[2].xyz, ref.particles[2].xyz) < 1e-8
         if var is not None:
-            assert math.dist(var.particles[2].xyz, rvar.particles[2].xyz) < 1e-6 * math.hypot(*rvar.particles[2].xyz)
+            assert math.dist(var.particles[0].xyz, rvar.particles[0].xyz) < 1e-6 * math.hypot(*rvar.particles[0].xyz)
+
+
+def with_variations(kind):
+    # (the variations of every particle: MEGNO's, or two sets of
+    # add_variation(), one of them varying a mass)
+    def configure(sim):
+        if kind == "megno":
+            sim.init_megno(seed=3)
+            return
+        var = sim.add_variation()
+        var.particles[1].x, var.particles[2].vy, var.particles[1].m = 1e-3, 1e-4, 1e-5
+        other = sim.add_variation()
+        other.particles[3].x, other.particles[4].vz = 1e-6, -2e-6
+    return configure
+
+
+def variational_state(sim):
+    ps = sim._particles_var
+    return [(ps[i].x, ps[i].y, ps[i].z, ps[i].vx, ps[i].vy, ps[i].vz) for i in range(sim.N_var)]
+
+
+@pytest.mark.parametrize("kind", ["megno", "sets"])
+@pytest.mark.parametrize("build", [planets(), planets(softening=0.05), planets(N_active=3, testparticle_type=0),
+                                   planets(N_active=3, testparticle_type=1)],
+                         ids=["planets", "softened", "test particles", "test particles pulling"])
+def test_own_variational_gravity_is_reboundss_bit_for_bit(build, kind):
+    # Variations of every particle take pfvi's own pass (REBOUND's
+    # variational gravity, stages as lanes); a callback that adds nothing
+    # sends the same run through REBOUND's routine stage by stage. The real
+    # and the variational particles, MEGNO and the evaluations must agree
+    # bit for bit, also after a reversal.
+    def run(forced):
+        sim = build()
+        sim.integrator = "pfvi"
+        with_variations(kind)(sim)
+        if forced:
+            sim.additional_forces = lambda simp: None
+            sim.force_is_velocity_dependent = 0
+        sim.integrate(20.0)
+        first = (state(sim), variational_state(sim), sim.megno() if kind == "megno" else None,
+                 sim.integrator.n_force_evaluations)
+        sim.dt *= -1
+        sim.integrate(5.0)
+        return first, (state(sim), variational_state(sim))
+    own, forced = run(False), run(True)
+    assert own == forced
+    assert own[0][3] > 500 and any(v != 0. for row in own[0][1] for v in row)
 
 
 def j2_like(simp):

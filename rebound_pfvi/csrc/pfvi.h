@@ -1441,6 +1441,9 @@ struct pfvi_state {
     double (*var_predictor_a)[PFVI_STAGES_MAX][3];
     double (*var_stage_x)[PFVI_STAGES_MAX][3];
     double (*var_predictor_x)[PFVI_STAGES_MAX][3];
+    // pfvi_gravity_variational_stages' positions and forces, laid out as gravity_x's.
+    double (*var_gravity_x)[3][PFVI_STAGES_MAX];
+    double (*var_gravity_a)[3][PFVI_STAGES_MAX];
     double (*var_unknowns)[PFVI_STAGES_MAX-1][3];
     double (*var_unknowns_next)[PFVI_STAGES_MAX-1][3];
     struct pfvi_stage_start* var_stage_start;
@@ -1615,6 +1618,15 @@ PFVI_INTERNAL int pfvi_gravity_own(const struct reb_simulation* r, const struct 
 PFVI_INTERNAL int pfvi_gravity_own_beside_forces(const struct reb_simulation* r, const struct pfvi_state* st, size_t N);
 PFVI_INTERNAL int pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
         const double (*x)[PFVI_STAGES_MAX][3], double (*a)[PFVI_STAGES_MAX][3], int k0, int k1);
+// Whether REBOUND's routine would compute the variational particles' forces
+// with its basic variational gravity alone (first order, whole sets, no
+// ghost boxes, nothing called after): pfvi_gravity_variational_stages then
+// computes them at stages k0 .. k1 of the real positions x and the
+// variational dx into da, bit for bit as REBOUND would stage by stage.
+PFVI_INTERNAL int pfvi_gravity_own_variational(const struct reb_simulation* r, const struct pfvi_state* st, size_t N);
+PFVI_INTERNAL void pfvi_gravity_variational_stages(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
+        const double (*x)[PFVI_STAGES_MAX][3], const double (*dx)[PFVI_STAGES_MAX][3],
+        double (*da)[PFVI_STAGES_MAX][3], int k0, int k1);
 PFVI_INTERNAL void pfvi_track_added(struct pfvi_state* st);
 PFVI_INTERNAL void pfvi_track_removed(struct pfvi_state* st, size_t index);
 // The iteration rule shared by every fixed-point iteration.

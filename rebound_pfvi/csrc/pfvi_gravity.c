@@ -20,14 +20,18 @@
  * bit for bit REBOUND's, and so is every trajectory (tests/test_gravity.py
  * compares them with the REBOUND path forced).
  *
- * Used where REBOUND's routine would compute its basic gravity (no
- * variational particles, no ignored terms, ghost boxes only where their
- * shifts do not depend on time: a periodic box, not a shearing sheet):
- * alone (pfvi_gravity_own), or beside additional forces
- * (pfvi_gravity_own_beside_forces: a callback, REBOUNDx's, velocity-dependent
- * or not), which are then called at each stage with the particles there and
- * this gravity in their accelerations, as REBOUND's routine would call them.
- * Everything else goes through REBOUND as before.
+ * Used where REBOUND's routine would compute its basic gravity (no ignored
+ * terms, ghost boxes only where their shifts do not depend on time: a
+ * periodic box, not a shearing sheet): alone (pfvi_gravity_own), or beside
+ * additional forces (pfvi_gravity_own_beside_forces: a callback, REBOUNDx's,
+ * velocity-dependent or not), which are then called at each stage with the
+ * particles there and this gravity in their accelerations, as REBOUND's
+ * routine would call them; or with variational particles of first order,
+ * each set a variation of every particle (MEGNO's, add_variation()'s), whose
+ * forces are REBOUND's reb_gravity_basic_calculate_acceleration_var computed
+ * the same way (pfvi_gravity_own_variational, without additional forces or
+ * ghost boxes). Everything else (a test particle's variation, second order,
+ * variations beside additional forces) goes through REBOUND as before.
  */
 #include <math.h>
 #include <string.h>
@@ -36,13 +40,18 @@
 
 // REBOUND's update of the accelerations would compute its basic gravity (and
 // nothing else for the particles, whatever else it calls after it).
-static int basic_gravity(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
+// (The real particles' gravity; the variational particles' is asked apart.)
+static int basic_real_gravity(const struct reb_simulation* r, size_t N){
     // (Ghost boxes whose shifts do not depend on t: a shearing sheet's move
     // with it, and the stages of a pass are at different times.)
     const int ghosts = r->N_ghost_x != 0 || r->N_ghost_y != 0 || r->N_ghost_z != 0;
-    return r->gravity == REB_GRAVITY_BASIC && r->N_var == 0 && st->var_N == 0
+    return r->gravity == REB_GRAVITY_BASIC
         && r->gravity_ignore_terms == 0 && (!ghosts || r->boundary != REB_BOUNDARY_SHEAR)
         && (r->N_active == SIZE_MAX || r->N_active <= N);
+}
+
+static int basic_gravity(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
+    return basic_real_gravity(r, N) && r->N_var == 0 && st->var_N == 0;
 }
 
 int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
@@ -51,6 +60,25 @@ int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st
 
 int pfvi_gravity_own_beside_forces(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
     return basic_gravity(r, st, N) && r->additional_forces != NULL;
+}
+
+// Variational particles whose forces REBOUND's routine would compute with
+// its basic variational gravity alone: every configuration of first order
+// and a whole set of N (a variation of every particle, as MEGNO's and
+// add_variation()'s are; pfvi_var_map listed them in var_sets), no ghost
+// boxes (REBOUND's variational gravity has none) and nothing called after.
+int pfvi_gravity_own_variational(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
+    if (!(basic_real_gravity(r, N) && r->additional_forces == NULL && st->var_N > 0 && r->N_var == st->var_N
+            && r->N_ghost_x == 0 && r->N_ghost_y == 0 && r->N_ghost_z == 0 && st->var_sets_N == r->N_var_config)){
+        return 0;
+    }
+    for (size_t c=0; c<r->N_var_config; c++){
+        const struct reb_variational_configuration* const vc = &r->var_config[c];
+        if (vc->order != 1 || vc->testparticle >= 0 || vc->index < 0 || (size_t)vc->index != st->var_sets[c]){
+            return 0;
+        }
+    }
+    return 1;
 }
 
 #define LANES PFVI_STAGES_MAX
@@ -181,4 +209,132 @@ int pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, s
     double lanes[4];
     memcpy(lanes, &nan, sizeof(lanes));
     return (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]) == 0.;
+}
+
+// The pair (i, j)'s variational terms in lanes l0 .. l1 - 1, as the loop
+// body of REBOUND's reb_gravity_basic_calculate_acceleration_var (first
+// order; the same in 5.0 to 5.2): the tidal tensor of the unsoftened
+// distance applied to the pair's variation, and the variations of the
+// masses; with pull_j = 0 (a test particle i of type 0) j feels nothing.
+static inline __attribute__((always_inline)) void var_pair_terms(const double (*restrict xi)[LANES],
+        const double (*restrict xj)[LANES], const double (*restrict di)[LANES], const double (*restrict dj)[LANES],
+        double (*restrict dai)[LANES], double (*restrict daj)[LANES], double Gmi, double Gmj, double dGmi, double dGmj,
+        int pull_j, const int l0, const int l1){
+    for (int l=l0; l<l1; l++){
+        const double dx = xi[0][l] - xj[0][l];
+        const double dy = xi[1][l] - xj[1][l];
+        const double dz = xi[2][l] - xj[2][l];
+        const double r2 = dx*dx + dy*dy + dz*dz;
+        const double _r = sqrt(r2);
+        const double r3inv = 1./(r2*_r);
+        const double r5inv = 3.*r3inv/r2;
+        const double ddx = di[0][l] - dj[0][l];
+        const double ddy = di[1][l] - dj[1][l];
+        const double ddz = di[2][l] - dj[2][l];
+        const double dxdx = dx*dx*r5inv - r3inv;
+        const double dydy = dy*dy*r5inv - r3inv;
+        const double dzdz = dz*dz*r5inv - r3inv;
+        const double dxdy = dx*dy*r5inv;
+        const double dxdz = dx*dz*r5inv;
+        const double dydz = dy*dz*r5inv;
+        const double dax = ddx*dxdx + ddy*dxdy + ddz*dxdz;
+        const double day = ddx*dxdy + ddy*dydy + ddz*dydz;
+        const double daz = ddx*dxdz + ddy*dydz + ddz*dzdz;
+        dai[0][l] += Gmj*dax - dGmj*r3inv*dx;
+        dai[1][l] += Gmj*day - dGmj*r3inv*dy;
+        dai[2][l] += Gmj*daz - dGmj*r3inv*dz;
+        if (pull_j){
+            daj[0][l] -= Gmi*dax - dGmi*r3inv*dx;
+            daj[1][l] -= Gmi*day - dGmi*r3inv*dy;
+            daj[2][l] -= Gmi*daz - dGmi*r3inv*dz;
+        }
+    }
+}
+
+// One set's pairs in lanes l0 .. l1 - 1, in REBOUND's order: the active
+// pairs (i from 1, j < i), then each test particle against the active ones.
+static inline __attribute__((always_inline)) void var_all_pairs(const struct reb_particle* ps,
+        const struct reb_particle* pv, size_t N, size_t N_active, int pull, double G,
+        const double (*restrict X)[3][LANES], const double (*restrict D)[3][LANES], double (*restrict DA)[3][LANES],
+        const int l0, const int l1){
+    for (size_t i=1; i<N_active; i++){
+        for (size_t j=0; j<i; j++){
+            var_pair_terms(X[i], X[j], D[i], D[j], DA[i], DA[j], G*ps[i].m, G*ps[j].m, G*pv[i].m, G*pv[j].m,
+                    1, l0, l1);
+        }
+    }
+    for (size_t i=N_active; i<N; i++){
+        for (size_t j=0; j<N_active; j++){
+            if (pull){
+                var_pair_terms(X[i], X[j], D[i], D[j], DA[i], DA[j], G*ps[i].m, G*ps[j].m, G*pv[i].m, G*pv[j].m,
+                        1, l0, l1);
+            }else{
+                var_pair_terms(X[i], X[j], D[i], D[j], DA[i], DA[j], G*ps[i].m, G*ps[j].m, G*pv[i].m, G*pv[j].m,
+                        0, l0, l1);
+            }
+        }
+    }
+}
+
+// REBOUND's variational gravity at stages k0 .. k1 of the real positions x
+// and the variational positions dx, into da, in one pass over each set's
+// pairs (the stages as lanes, as pfvi_gravity_stages). Each stage's sums add
+// the same terms in the same order as REBOUND's routine would at that
+// stage: the same bits (tests/test_gravity.py). Not finite is not checked
+// here: REBOUND's path does not check these either (the tangent solve's
+// change does).
+PFVI_VECTOR_CLONES
+void pfvi_gravity_variational_stages(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
+        const double (*x)[PFVI_STAGES_MAX][3], const double (*dx)[PFVI_STAGES_MAX][3],
+        double (*da)[PFVI_STAGES_MAX][3], int k0, int k1){
+    const struct reb_particle* const ps = r->particles;
+    const double G = r->G;
+    const size_t N_active = (r->N_active == SIZE_MAX) ? N : r->N_active;
+    const int pull = r->testparticle_type;
+    double (*restrict X)[3][LANES] = st->gravity_x;
+    double (*restrict D)[3][LANES] = st->var_gravity_x;
+    double (*restrict DA)[3][LANES] = st->var_gravity_a;
+    int stage_of[LANES];
+    for (int l=0; l<LANES; l++){
+        stage_of[l] = (l < k0) ? k0 : (l > k1) ? k1 : l;
+    }
+    for (size_t i=0; i<N; i++){
+        for (int l=0; l<LANES; l++){
+            const int k = stage_of[l];
+            X[i][0][l] = x[i][k][0];
+            X[i][1][l] = x[i][k][1];
+            X[i][2][l] = x[i][k][2];
+        }
+    }
+    const pfvi_lanes zero = {0., 0., 0., 0.};
+    for (size_t v=0; v<st->var_N; v++){
+        for (int l=0; l<LANES; l++){
+            const int k = stage_of[l];
+            D[v][0][l] = dx[v][k][0];
+            D[v][1][l] = dx[v][k][1];
+            D[v][2][l] = dx[v][k][2];
+        }
+        for (int c=0; c<3; c++){
+            memcpy(&DA[v][c][0], &zero, sizeof(zero));
+            memcpy(&DA[v][c][4], &zero, sizeof(zero));
+        }
+    }
+    const double (*const Xc)[3][LANES] = (const double (*)[3][LANES])X;
+    for (size_t set=0; set<st->var_sets_N; set++){
+        const size_t first = st->var_sets[set];
+        const struct reb_particle* const pv = r->particles_var + first;
+        const double (*const Dc)[3][LANES] = (const double (*)[3][LANES])(D + first);
+        if (k1 < 4){
+            var_all_pairs(ps, pv, N, N_active, pull, G, Xc, Dc, DA + first, 0, 4);
+        }else if (k0 >= 4){
+            var_all_pairs(ps, pv, N, N_active, pull, G, Xc, Dc, DA + first, 4, LANES);
+        }else{
+            var_all_pairs(ps, pv, N, N_active, pull, G, Xc, Dc, DA + first, 0, LANES);
+        }
+    }
+    for (size_t v=0; v<st->var_N; v++){
+        for (int k=k0; k<=k1; k++){
+            da[v][k][0] = DA[v][0][k]; da[v][k][1] = DA[v][1][k]; da[v][k][2] = DA[v][2][k];
+        }
+    }
 }

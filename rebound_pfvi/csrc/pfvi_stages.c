@@ -278,6 +278,52 @@ static int stage_forces_own(struct reb_simulation* r, struct pfvi_state* st, siz
     return 1;
 }
 
+// stage_forces where REBOUND would compute its basic gravity and its basic
+// variational gravity alone (MEGNO's variations, add_variation()'s): the
+// real forces as stage_forces_own's (with real = 0 the real particles'
+// stage points are their converged ones, in stage_x: the variational
+// particles' tangent solve goes on alone), then the variational particles'
+// at their tangent stage points in one pass (pfvi_gravity.c), and the
+// particles and t left as REBOUND's trips leave them. 0 where a real force
+// is not finite (REBOUND's path then names it).
+static int stage_forces_own_variational(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
+        double h, int real, int k_first, int k_last){
+    const int s = st->rule.s;
+    const size_t nv = st->var_N;
+    if (real){
+        stage_points(st, N, k_first, k_last);
+        if (!pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a,
+                k_first, k_last)){
+            return 0;
+        }
+    }
+    for (size_t v=0; v<nv; v++){
+        for (int k=k_first; k<=k_last; k++){
+            stage_position(&st->stage_fit[st->var_real[v]], &st->var_stage_start[v], &var_compensation, NULL,
+                    (const double (*)[3])st->var_unknowns[v], s, k, st->var_stage_x[v][k]);
+        }
+    }
+    pfvi_gravity_variational_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x,
+            (const double (*)[PFVI_STAGES_MAX][3])st->var_stage_x, st->var_stage_a, k_first, k_last);
+    st->statistics.n_force_evaluations += (uint64_t)(k_last - k_first + 1);
+    struct reb_particle* const ps = r->particles;
+    for (size_t i=0; i<N; i++){
+        const double* const x = st->stage_x[i][k_last];
+        const double* const a = st->stage_a[i][k_last];
+        ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
+        ps[i].ax = a[0]; ps[i].ay = a[1]; ps[i].az = a[2];
+    }
+    struct reb_particle* const pv = r->particles_var;
+    for (size_t v=0; v<nv; v++){
+        const double* const x = st->var_stage_x[v][k_last];
+        const double* const a = st->var_stage_a[v][k_last];
+        pv[v].x = x[0]; pv[v].y = x[1]; pv[v].z = x[2];
+        pv[v].ax = a[0]; pv[v].ay = a[1]; pv[v].az = a[2];
+    }
+    r->t = t0 + st->rule.c[k_last]*h;
+    return 1;
+}
+
 // Evaluates the forces at every stage point of the current iterate (and at
 // the first node too when forces depend on velocities, since its velocity is
 // the interpolant's, not v_k). Returns 0, rolled back, on a failure.
@@ -294,6 +340,10 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
     struct reb_particle* const pv = r->particles_var;
     const size_t nv = st->var_N;
     if (real && !vdep && pfvi_gravity_own(r, st, N) && stage_forces_own(r, st, N, t0, h, k_first, k_last)){
+        return 1;
+    }
+    if (nv > 0 && !vdep && pfvi_gravity_own_variational(r, st, N)
+            && stage_forces_own_variational(r, st, N, t0, h, real, k_first, k_last)){
         return 1;
     }
     if (vdep){

@@ -67,6 +67,8 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->var_stage_a);
     free(st->var_predictor_a);
     free(st->var_stage_x);
+    free(st->var_gravity_x);
+    free(st->var_gravity_a);
     free(st->var_predictor_x);
     free(st->var_unknowns);
     free(st->var_unknowns_next);
@@ -239,6 +241,8 @@ int pfvi_var_scratch(struct pfvi_state* st, size_t n){
     st->var_stage_a = pfvi_grow(st->var_stage_a, n*sizeof(*st->var_stage_a), &ok);
     st->var_predictor_a = pfvi_grow(st->var_predictor_a, n*sizeof(*st->var_predictor_a), &ok);
     st->var_stage_x = pfvi_grow(st->var_stage_x, n*sizeof(*st->var_stage_x), &ok);
+    st->var_gravity_x = pfvi_grow(st->var_gravity_x, n*sizeof(*st->var_gravity_x), &ok);
+    st->var_gravity_a = pfvi_grow(st->var_gravity_a, n*sizeof(*st->var_gravity_a), &ok);
     st->var_predictor_x = pfvi_grow(st->var_predictor_x, n*sizeof(*st->var_predictor_x), &ok);
     st->var_unknowns = pfvi_grow(st->var_unknowns, n*sizeof(*st->var_unknowns), &ok);
     st->var_unknowns_next = pfvi_grow(st->var_unknowns_next, n*sizeof(*st->var_unknowns_next), &ok);
