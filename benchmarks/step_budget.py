@@ -111,7 +111,7 @@ CATEGORIES = ("gravity", "force interface", "solve / method", "predictor", "cont
 
 FORCE_INTERFACE = {"pfvi_update_acceleration", "force_model_unchanged", "written_keep", "written_changed",
                    "stage_forces", "stage_solve_forces", "reb_simulation_update_acceleration",
-                   "stage_forces_own", "stage_forces_own_variational"}
+                   "stage_forces_own", "stage_forces_own_variational", "stage_points"}
 PREDICTOR = {"pfvi_solve_predict", "predict_body", "kepler_start", "kepler_drift", "kepler_pull", "stumpff",
              "rest_weights_of", "rest_integral", "stage_predict", "pfvi_lagrange_at", "centre_start"}
 LIBM_PREDICTOR = ("sin", "cos", "sincos")
