@@ -211,6 +211,27 @@ def test_variational_particles_are_refused_where_rebound_has_no_variational_forc
                    r"\(sim.force_is_velocity_dependent = 1\) are not supported")
 
 
+@pytest.mark.parametrize("edit", ["overlapping sets", "order edited"])
+def test_variational_configurations_edited_into_nonsense_are_refused(edit):
+    # (A hostile trial's ctypes edits of REBOUND's var_config: two sets made
+    # to overlap left the other set's particles unmapped, and a first-order
+    # set turned second-order pointed REBOUND at unset first-order sets: both
+    # crashed. Each variational particle must lie in exactly one set.)
+    sim = pfvi_sim()
+    var = sim.add_variation()
+    var.particles[1].x = 1.0
+    if edit == "overlapping sets":
+        sim.add_variation().particles[1].vy = 1.0
+        sim.var_config[1].index = 0
+    else:
+        sim.var_config[0].order = 2
+        sim.var_config[0].index_1st_order_a = 1 << 20
+    var_before = [(p.x, p.vx) for p in var.particles]
+    assert_refused(sim, r"the \d variational configurations do not describe the N_var = \d variational particles "
+                   r"of the N = \d particles, each in one configuration")
+    assert [(p.x, p.vx) for p in var.particles] == var_before
+
+
 def test_a_refused_step_can_be_retried_after_fixing_the_input():
     sim = pfvi_sim()
     reference = pfvi_sim()

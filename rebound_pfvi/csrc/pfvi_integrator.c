@@ -1607,7 +1607,8 @@ static void pfvi_step_take(struct reb_simulation* r, struct pfvi_state* st){
         }
         if (!pfvi_var_map(r, st)){
             pfvi_error(r, "pfvi: the %zu variational configurations do not describe the N_var = %zu variational "
-                    "particles of the N = %zu particles (particles added after a variation?); step not taken.",
+                    "particles of the N = %zu particles, each in one configuration (particles added after a "
+                    "variation? a configuration's index or order edited?); step not taken.",
                     r->N_var_config, r->N_var, N);
             return;
         }

@@ -270,32 +270,47 @@ int pfvi_var_scratch(struct pfvi_state* st, size_t n){
 
 int pfvi_var_map(const struct reb_simulation* r, struct pfvi_state* st){
     const size_t N = r->N, n = r->N_var;
-    size_t covered = 0;
+    // Each variational particle in exactly one configuration: sets edited
+    // to overlap (var_config's index) would leave others unmapped, and the
+    // step would read their real particle from an unset entry.
+    for (size_t v=0; v<n; v++){
+        st->var_real[v] = SIZE_MAX;
+    }
     st->var_sets_N = 0;
     for (size_t v=0; v<r->N_var_config; v++){
         const struct reb_variational_configuration* const vc = &r->var_config[v];
-        if (vc->index < 0){
+        if (vc->index < 0 || (vc->order != 1 && vc->order != 2)){
             return 0;
         }
         const size_t first = (size_t)vc->index;
-        if (vc->testparticle >= 0){
-            if ((size_t)vc->testparticle >= N || first >= n){
+        const size_t size = (vc->testparticle >= 0) ? 1 : N;
+        if (first > n || size > n - first || (vc->testparticle >= 0 && (size_t)vc->testparticle >= N)){
+            return 0;
+        }
+        if (vc->order == 2){
+            // (REBOUND reads the first-order sets a second-order one is made
+            // from: they must lie among the variational particles)
+            if (vc->index_1st_order_a < 0 || vc->index_1st_order_b < 0
+                    || (size_t)vc->index_1st_order_a > n - size || (size_t)vc->index_1st_order_b > n - size){
                 return 0;
             }
-            st->var_real[first] = (size_t)vc->testparticle;
-            covered++;
-        }else{
-            if (first + N > n){
+        }
+        for (size_t i=0; i<size; i++){
+            if (st->var_real[first + i] != SIZE_MAX){
                 return 0;
             }
-            for (size_t i=0; i<N; i++){
-                st->var_real[first + i] = i;
-            }
+            st->var_real[first + i] = (vc->testparticle >= 0) ? (size_t)vc->testparticle : i;
+        }
+        if (vc->testparticle < 0){
             st->var_sets[st->var_sets_N++] = first;
-            covered += N;
         }
     }
-    return covered == n;
+    for (size_t v=0; v<n; v++){
+        if (st->var_real[v] == SIZE_MAX){
+            return 0;
+        }
+    }
+    return 1;
 }
 
 int pfvi_particle_finite(const struct reb_particle* p){
