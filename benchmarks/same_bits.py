@@ -101,6 +101,19 @@ elif name in ("variations", "variations-testparticles", "variation-of-one"):
         sim.testparticle_type = 1
         sim.testparticle_hidewarnings = 1
     times = [name.split("-")[0], 15.0, "flip", 3.0]
+elif name == "variations-pull":
+    # Variations of every particle beside a force callback of positions
+    # that adds its variational term too, over a reversal.
+    planets(sim)
+    def force(simp):
+        s = simp.contents
+        for p in s.particles[:s.N]:
+            p.az -= 0.05 * p.z
+        for v in range(s.N_var):
+            s._particles_var[v].az -= 0.05 * s._particles_var[v].z
+    sim.additional_forces = force
+    sim.force_is_velocity_dependent = 0
+    times = ["variations", 12.0, "flip", 3.0]
 elif name in ("pull", "drag"):
     # A force callback of positions alone, and one of velocities too
     # (called beside pfvi's own gravity pass at each stage).
@@ -163,7 +176,7 @@ RUNS = (["scene:" + s for s in ("kepler", "comet", "triple", "jupiter-comet", "r
         + [f"stages2-{f}" for f in ("none", "phase", "exact", "phase-literal")]   # the two-point scheme
         + ["stages5-phase-literal", "stages7-none", "seed-control", "reversible-control"]
         + ["outputs", "reversal", "contacts", "megno", "variations", "variations-testparticles",
-           "variation-of-one", "pull", "drag"]
+           "variation-of-one", "variations-pull", "pull", "drag"]
         # (REBOUNDx's forces where it is installed: an optional extra)
         + (["reboundx-gr", "reboundx-gr_potential"] if importlib.util.find_spec("reboundx") else []))
 

@@ -5,7 +5,7 @@ of every stage of a round in one pass; with additional forces (a callback,
 REBOUNDx) it computes the gravity so and calls them at each stage beside
 it; variational particles of first order, each a variation of every
 particle (MEGNO's, add_variation()'s), get REBOUND's variational gravity in
-the same pass's way; anything else (a test particle's variation, ignored
+the same pass's way, with or without additional forces; anything else (a test particle's variation, ignored
 terms, another gravity module, the ghost boxes of a shearing sheet) goes
 through REBOUND stage by stage. A test particle's variation forces
 REBOUND's path without changing the real particles' trajectory, so the two
@@ -265,6 +265,50 @@ def test_a_velocity_dependent_force_sees_reboundss_gravity_at_every_stage():
     sim.force_is_velocity_dependent = 1
     sim.integrate(3.0)
     assert seen["calls"] > 100 and seen["differ"] == 0
+
+
+@pytest.mark.parametrize("kind", ["megno", "sets"])
+def test_a_force_beside_the_variational_pass_sees_reboundss_gravity_at_every_stage(kind):
+    # With variational particles and a force callback (here J2-like, its
+    # variational term added too) the real and the variational gravity are
+    # the own pass's and the callback is called at each stage beside it:
+    # at every stage, the real solve's rounds and the tangent solve's own,
+    # the accelerations it finds are those REBOUND's routine computes for the
+    # same positions, real and variational, bit for bit (a twin simulation).
+    import ctypes
+
+    build = planets(softening=0.01, N_active=3, testparticle_type=1)
+    twin = build()
+    with_variations(kind)(twin)
+    seen = {"calls": 0, "differ": 0}
+
+    def force(simp):
+        sim = simp.contents
+        ps, pv = sim.particles, sim._particles_var
+        for i in range(sim.N):
+            twin.particles[i].x, twin.particles[i].y, twin.particles[i].z = ps[i].x, ps[i].y, ps[i].z
+        for v in range(sim.N_var):
+            tv = twin._particles_var[v]
+            tv.x, tv.y, tv.z, tv.m = pv[v].x, pv[v].y, pv[v].z, pv[v].m
+        rebound.clibrebound.reb_simulation_update_acceleration(ctypes.byref(twin))
+        seen["calls"] += 1
+        seen["differ"] += sum((ps[i].ax, ps[i].ay, ps[i].az) != (twin.particles[i].ax, twin.particles[i].ay,
+                                                                 twin.particles[i].az) for i in range(sim.N))
+        seen["differ"] += sum((pv[v].ax, pv[v].ay, pv[v].az) != (twin._particles_var[v].ax, twin._particles_var[v].ay,
+                                                                 twin._particles_var[v].az) for v in range(sim.N_var))
+        for i in range(sim.N):
+            ps[i].az -= 0.01 * ps[i].z
+        for v in range(sim.N_var):
+            pv[v].az -= 0.01 * pv[v].z
+
+    sim = build()
+    sim.integrator = "pfvi"
+    with_variations(kind)(sim)
+    sim.additional_forces = force
+    sim.force_is_velocity_dependent = 0
+    sim.integrate(3.0)
+    assert seen["calls"] > 100 and seen["differ"] == 0
+    assert any(sim._particles_var[v].az != 0. for v in range(sim.N_var))
 
 
 def test_ignored_terms_switched_in_a_callback_are_rebounds_from_the_next_stage():

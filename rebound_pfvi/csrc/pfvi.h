@@ -1210,6 +1210,9 @@ struct pfvi_state {
     // stages as the innermost (vectorised) index.
     double (*gravity_x)[3][PFVI_STAGES_MAX];
     double (*gravity_a)[3][PFVI_STAGES_MAX];
+    // The real gravity at the converged stage points while the tangent
+    // solve goes on alone beside additional forces (stage_a keeps its own).
+    double (*beside_a)[PFVI_STAGES_MAX][3];
     double (*predictor_x)[PFVI_STAGES_MAX][3];
     double (*unknowns)[PFVI_STAGES_MAX-1][3];
     double (*unknowns_next)[PFVI_STAGES_MAX-1][3];
@@ -1624,6 +1627,10 @@ PFVI_INTERNAL int pfvi_gravity_stages(const struct reb_simulation* r, struct pfv
 // computes them at stages k0 .. k1 of the real positions x and the
 // variational dx into da, bit for bit as REBOUND would stage by stage.
 PFVI_INTERNAL int pfvi_gravity_own_variational(const struct reb_simulation* r, const struct pfvi_state* st, size_t N);
+// The same with additional forces called after the gravity: the real and
+// variational gravity can be the pass's, the forces called at each stage beside it.
+PFVI_INTERNAL int pfvi_gravity_own_variational_beside_forces(const struct reb_simulation* r,
+        const struct pfvi_state* st, size_t N);
 PFVI_INTERNAL void pfvi_gravity_variational_stages(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
         const double (*x)[PFVI_STAGES_MAX][3], const double (*dx)[PFVI_STAGES_MAX][3],
         double (*da)[PFVI_STAGES_MAX][3], int k0, int k1);

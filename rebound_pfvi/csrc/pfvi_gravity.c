@@ -29,9 +29,10 @@
  * routine would call them; or with variational particles of first order,
  * each set a variation of every particle (MEGNO's, add_variation()'s), whose
  * forces are REBOUND's reb_gravity_basic_calculate_acceleration_var computed
- * the same way (pfvi_gravity_own_variational, without additional forces or
- * ghost boxes). Everything else (a test particle's variation, second order,
- * variations beside additional forces) goes through REBOUND as before.
+ * the same way (pfvi_gravity_own_variational, without ghost boxes; with
+ * additional forces called beside it, pfvi_gravity_own_variational_beside_forces).
+ * Everything else (a test particle's variation, second order) goes through
+ * REBOUND as before.
  */
 #include <math.h>
 #include <string.h>
@@ -63,12 +64,13 @@ int pfvi_gravity_own_beside_forces(const struct reb_simulation* r, const struct 
 }
 
 // Variational particles whose forces REBOUND's routine would compute with
-// its basic variational gravity alone: every configuration of first order
-// and a whole set of N (a variation of every particle, as MEGNO's and
-// add_variation()'s are; pfvi_var_map listed them in var_sets), no ghost
-// boxes (REBOUND's variational gravity has none) and nothing called after.
-int pfvi_gravity_own_variational(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
-    if (!(basic_real_gravity(r, N) && r->additional_forces == NULL && st->var_N > 0 && r->N_var == st->var_N
+// its basic variational gravity: every configuration of first order and a
+// whole set of N (a variation of every particle, as MEGNO's and
+// add_variation()'s are; pfvi_var_map listed them in var_sets) and no ghost
+// boxes (REBOUND's variational gravity has none); alone, or with additional
+// forces called after it.
+static int basic_variational_gravity(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
+    if (!(basic_real_gravity(r, N) && st->var_N > 0 && r->N_var == st->var_N
             && r->N_ghost_x == 0 && r->N_ghost_y == 0 && r->N_ghost_z == 0 && st->var_sets_N == r->N_var_config)){
         return 0;
     }
@@ -79,6 +81,15 @@ int pfvi_gravity_own_variational(const struct reb_simulation* r, const struct pf
         }
     }
     return 1;
+}
+
+int pfvi_gravity_own_variational(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
+    return r->additional_forces == NULL && basic_variational_gravity(r, st, N);
+}
+
+int pfvi_gravity_own_variational_beside_forces(const struct reb_simulation* r, const struct pfvi_state* st,
+        size_t N){
+    return r->additional_forces != NULL && basic_variational_gravity(r, st, N);
 }
 
 #define LANES PFVI_STAGES_MAX

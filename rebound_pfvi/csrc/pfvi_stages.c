@@ -368,11 +368,35 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
     // additional forces called: the same calls and sums as REBOUND's. (A
     // gravity not finite: REBOUND's routine, which names the cause. The
     // stage forces the velocities above came from are read by then.)
+    // With variational particles (never velocity-dependent forces: refused)
+    // their gravity too, REBOUND's variational gravity at their tangent
+    // stage points; while the tangent solve goes on alone (real = 0) the real
+    // gravity at the converged stage points (stage_x) is computed for the
+    // callback to find, into scratch, as REBOUND's routine would recompute it.
     int given = 0;
+    double (*real_a)[PFVI_STAGES_MAX][3] = st->stage_a;
     if (real && nv == 0 && pfvi_gravity_own_beside_forces(r, st, N)){
         stage_points(st, N, k_start, k_last);
         given = pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a,
             k_start, k_last);
+    }else if (nv > 0 && !vdep && pfvi_gravity_own_variational_beside_forces(r, st, N)){
+        if (real){
+            stage_points(st, N, k_start, k_last);
+        }else{
+            real_a = st->beside_a;
+        }
+        given = pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, real_a,
+            k_start, k_last);
+        for (size_t v=0; given && v<nv; v++){
+            for (int k=k_start; k<=k_last; k++){
+                stage_position(&st->stage_fit[st->var_real[v]], &st->var_stage_start[v], &var_compensation, NULL,
+                        (const double (*)[3])st->var_unknowns[v], s, k, st->var_stage_x[v][k]);
+            }
+        }
+        if (given){
+            pfvi_gravity_variational_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x,
+                    (const double (*)[PFVI_STAGES_MAX][3])st->var_stage_x, st->var_stage_a, k_start, k_last);
+        }
     }
     for (int k=k_start; k<=k_last; k++){
         for (size_t v=0; v<nv; v++){
@@ -404,9 +428,14 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
         // (A callback may have changed what REBOUND's routine computes, past
         // what the step's force model keeps: REBOUND's gravity_ignore_terms.
         // From then on, its routine, as before.)
-        const int gravity_given = given && pfvi_gravity_own_beside_forces(r, st, N);
+        const int gravity_given = given && (nv ? pfvi_gravity_own_variational_beside_forces(r, st, N)
+                : pfvi_gravity_own_beside_forces(r, st, N));
         for (size_t i=0; gravity_given && i<N; i++){
-            ps[i].ax = st->stage_a[i][k][0]; ps[i].ay = st->stage_a[i][k][1]; ps[i].az = st->stage_a[i][k][2];
+            ps[i].ax = real_a[i][k][0]; ps[i].ay = real_a[i][k][1]; ps[i].az = real_a[i][k][2];
+        }
+        for (size_t v=0; gravity_given && v<nv; v++){
+            pv[v].ax = st->var_stage_a[v][k][0]; pv[v].ay = st->var_stage_a[v][k][1];
+            pv[v].az = st->var_stage_a[v][k][2];
         }
         r->t = t0 + rule->c[k]*h;
         if (!(gravity_given ? pfvi_update_additional_forces(r, st, N, t0) : pfvi_update_acceleration(r, st, N, t0))){

@@ -38,6 +38,7 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->stage_x);
     free(st->gravity_x);
     free(st->gravity_a);
+    free(st->beside_a);
     free(st->predictor_x);
     free(st->omega_fit);
     free(st->centre);
@@ -156,6 +157,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->predictor_x = pfvi_grow(st->predictor_x, N*sizeof(*st->predictor_x), &ok);
     st->gravity_x = pfvi_grow(st->gravity_x, N*sizeof(*st->gravity_x), &ok);
     st->gravity_a = pfvi_grow(st->gravity_a, N*sizeof(*st->gravity_a), &ok);
+    st->beside_a = pfvi_grow(st->beside_a, N*sizeof(*st->beside_a), &ok);
     st->omega_fit = pfvi_grow(st->omega_fit, N*sizeof(*st->omega_fit), &ok);
     st->centre = pfvi_grow(st->centre, N*sizeof(*st->centre), &ok);
     st->partners = pfvi_grow(st->partners, N*sizeof(*st->partners), &ok);
