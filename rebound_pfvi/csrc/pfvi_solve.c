@@ -1340,6 +1340,7 @@ PFVI_VECTOR_CLONES
 static void rest_integral(const struct pfvi_state* st, const struct pfvi_rest_weights* rw, double h,
         const double rest0[3], const double (*rest_old)[3], double (*out)[3]){
     const int s = st->rule.s;
+    const int n_old = rw->extrapolated ? s : 0;   // (read once: the loop's bound, not a load per pass)
     const double h2 = h*h;
     pfvi_lanes start_lo, start_hi;
     memcpy(&start_lo, &rw->start[0], sizeof(start_lo));
@@ -1347,7 +1348,7 @@ static void rest_integral(const struct pfvi_state* st, const struct pfvi_rest_we
     for (int c=0; c<3; c++){
         const pfvi_lanes r0 = {rest0[c], rest0[c], rest0[c], rest0[c]};
         pfvi_lanes lo = start_lo*r0, hi = start_hi*r0;
-        for (int m=0; rw->extrapolated && m<s; m++){
+        for (int m=0; m<n_old; m++){
             pfvi_lanes wl, wh;
             memcpy(&wl, &rw->last_t[m][0], sizeof(wl));
             memcpy(&wh, &rw->last_t[m][4], sizeof(wh));
@@ -1433,12 +1434,13 @@ static void predict_body(struct pfvi_state* st, const struct pfvi_field* field, 
     // per component; and tiny masses, PFVI_MASS_TINY, need no branch).
     const double wi = pi->m/M, wp = mp/M;
     if (pair){
+        const int n_old = rw->extrapolated ? s : 0;
         double cma0[3], cma_old[PFVI_STAGES_MAX][3];
         for (int c=0; c<3; c++){
             cm0[c] = wi*q0[c] + wp*xc0[c];
             cmv[c] = wi*v0[c] + wp*vc0[c];
             cma0[c] = wi*ai[c] + wp*ac0[c];
-            for (int m=0; rw->extrapolated && m<s; m++){
+            for (int m=0; m<n_old; m++){
                 cma_old[m][c] = wi*st->predictor_a[i][m][c] + wp*st->predictor_a[p][m][c];
             }
         }
