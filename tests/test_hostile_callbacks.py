@@ -317,6 +317,41 @@ def test_a_particle_edited_in_a_callback_during_a_step_is_refused(stages, edit):
     assert state(sim) == state(reference)
 
 
+@pytest.mark.parametrize("stages", [4, 8])
+@pytest.mark.parametrize("edit", ["m", "x", "vy"])
+def test_a_variational_particle_edited_in_a_callback_during_a_step_is_refused(stages, edit):
+    # A variational particle's mass enters REBOUND's variational gravity,
+    # which pfvi's own pass computes for all stages before the first call:
+    # edited in the callback, it acted from the next stage through REBOUND's
+    # routine but not through the pass (a hostile trial). Refused as a real
+    # particle's edit is, every particle, real and variational, and t
+    # restored.
+    def change(s):
+        p = s._particles_var[1]
+        setattr(p, edit, getattr(p, edit) * 1.5 + 1e-3)
+
+    def build():
+        sim = sun_and_planet(stages=stages, epsilon=1e-6)
+        sim.add(m=1e-3, a=2.0, e=0.1, f=1.0)
+        sim.init_megno(seed=1)
+        return sim
+
+    sim = build()
+    on_call(sim, 9, change)
+    sim.force_is_velocity_dependent = 0
+    with pytest.raises(RuntimeError, match=rf"changed variational particle 1's {edit} during the step"):
+        sim.integrate(1.0)
+    reference = build()
+    reference.additional_forces = lambda simp: None
+    reference.force_is_velocity_dependent = 0
+    if sim.integrator.n_steps:
+        reference.steps(sim.integrator.n_steps)
+    assert state(sim) == state(reference)
+    variational = [[getattr(run._particles_var[v], f) for f in FIELDS for v in range(run.N_var)]
+                   for run in (sim, reference)]
+    assert variational[0] == variational[1]
+
+
 @pytest.mark.parametrize("kind", ["int", "numpy", "0-d array"])
 @pytest.mark.parametrize("field, value", [("stages", 2**32 + 4), ("fitting", 2**32 + 3), ("stages", 2**31),
                                           ("stages", -2**31 - 1)])

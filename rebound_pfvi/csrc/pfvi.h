@@ -945,7 +945,7 @@ enum pfvi_fault_kind {
     PFVI_FAULT_UNSOLVED,        // t0, rounds: trials, h, value: F
     PFVI_FAULT_UNSTABLE,        // particle, h, n, value: omega, bound: its pull's frequency, growth: factor per step - 1
     PFVI_FAULT_CALLBACK_CHANGED,// t: a callback replaced additional_forces, gravity_custom or extras
-    PFVI_FAULT_PARTICLE_EDITED, // t, particle (SIZE_MAX: t itself), flag: which field (pfvi_written_fields)
+    PFVI_FAULT_PARTICLE_EDITED, // t, particle (SIZE_MAX: t itself), flag: which field (pfvi_written_fields), n: 1 for a variational particle
     PFVI_FAULT_UNRESOLVED_FIXED,// particle, h, t0, value: the error per orbit the stages imply, bound: |h| sigma (0: not measured)
     PFVI_FAULT_VARIATIONAL,     // particle: the variational particle (index in particles_var), n: its real particle, flag: field (PFVI_WRITTEN_FIELDS), value, t0
     PFVI_FAULT_REBOUND_ERROR,   // t: REBOUND raised an error inside a force evaluation (its message says why)
@@ -1166,6 +1166,7 @@ struct pfvi_state {
     struct pfvi_two_point_fit* fit;// per-particle coefficients of the current two-point step
     struct reb_vec3d* v_rotated;   // velocities before the final kick (velocity-dependent forces)
     struct pfvi_written* written;  // what pfvi set before a force evaluation (a callback may not edit it)
+    struct pfvi_written* written_var;   // the same for the variational particles (var_N of them)
     struct reb_vec3d* dx;          // position increment of the step, with the carried low-order part
     double (*end_low)[3];          // the s-point step's end increment's low part (solve_take_end): this trial's
     struct reb_vec3d* dv;          // velocity increment of the step, with the carried low-order part

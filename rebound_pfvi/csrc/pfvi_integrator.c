@@ -672,6 +672,12 @@ static void pfvi_report(struct reb_simulation* r, const struct pfvi_state* st){
                 pfvi_error(r, "pfvi: a callback changed sim.t during the step (force evaluation at t = %.17g); "
                         "step not taken, t and every particle restored. Change t between steps (a heartbeat, "
                         "or between integrate() calls).", f->t);
+            }else if (f->n == 1){
+                static const char* const fields[] = PFVI_WRITTEN_FIELDS;
+                pfvi_error(r, "pfvi: a callback changed variational particle %zu's %s during the step (force "
+                        "evaluation at t = %.17g); step not taken, every particle and t restored. Edit them "
+                        "between steps (a heartbeat, or between integrate() calls).", f->particle, fields[f->flag],
+                        f->t);
             }else{
                 static const char* const fields[] = PFVI_WRITTEN_FIELDS;
                 pfvi_error(r, "pfvi: a callback changed particle %zu's %s during the step (force evaluation at "

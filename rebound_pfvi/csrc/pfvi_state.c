@@ -68,6 +68,7 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->var_stage_a);
     free(st->var_predictor_a);
     free(st->var_stage_x);
+    free(st->written_var);
     free(st->var_gravity_x);
     free(st->var_gravity_a);
     free(st->var_predictor_x);
@@ -243,6 +244,7 @@ int pfvi_var_scratch(struct pfvi_state* st, size_t n){
     st->var_stage_a = pfvi_grow(st->var_stage_a, n*sizeof(*st->var_stage_a), &ok);
     st->var_predictor_a = pfvi_grow(st->var_predictor_a, n*sizeof(*st->var_predictor_a), &ok);
     st->var_stage_x = pfvi_grow(st->var_stage_x, n*sizeof(*st->var_stage_x), &ok);
+    st->written_var = pfvi_grow(st->written_var, n*sizeof(*st->written_var), &ok);
     st->var_gravity_x = pfvi_grow(st->var_gravity_x, n*sizeof(*st->var_gravity_x), &ok);
     st->var_gravity_a = pfvi_grow(st->var_gravity_a, n*sizeof(*st->var_gravity_a), &ok);
     st->var_predictor_x = pfvi_grow(st->var_predictor_x, n*sizeof(*st->var_predictor_x), &ok);
@@ -758,6 +760,14 @@ static void written_keep(const struct reb_simulation* r, struct pfvi_state* st, 
         const struct reb_particle* const p = &ps[i];
         st->written[i] = (struct pfvi_written){{p->x, p->y, p->z, p->vx, p->vy, p->vz, p->m}};
     }
+    // The variational particles too: their masses enter REBOUND's
+    // variational gravity, which the own pass computes for every stage
+    // before the first call (an edit there would act at the next stage
+    // through REBOUND's routine and not through the pass).
+    for (size_t v=0; v<st->var_N && r->particles_var; v++){
+        const struct reb_particle* const p = &r->particles_var[v];
+        st->written_var[v] = (struct pfvi_written){{p->x, p->y, p->z, p->vx, p->vy, p->vz, p->m}};
+    }
 }
 
 // The first field a callback changed during the evaluation: 1 (fault
@@ -777,6 +787,19 @@ static int written_changed(const struct reb_simulation* r, struct pfvi_state* st
                 k++;
             }
             st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_PARTICLE_EDITED, .particle = i, .t = t, .flag = k};
+            return 1;
+        }
+    }
+    for (size_t v=0; v<st->var_N && r->particles_var; v++){
+        const struct reb_particle* const p = &r->particles_var[v];
+        const double now[7] = {p->x, p->y, p->z, p->vx, p->vy, p->vz, p->m};
+        if (memcmp(now, st->written_var[v].value, sizeof(now)) != 0){
+            int k = 0;
+            while (k < 6 && memcmp(&now[k], &st->written_var[v].value[k], sizeof(double)) == 0){
+                k++;
+            }
+            st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_PARTICLE_EDITED, .particle = v, .t = t, .flag = k,
+                .n = 1};
             return 1;
         }
     }
