@@ -352,6 +352,27 @@ def test_a_variational_particle_edited_in_a_callback_during_a_step_is_refused(st
     assert variational[0] == variational[1]
 
 
+@pytest.mark.parametrize("before", [0, 1])
+def test_a_variation_added_in_a_callback_during_a_step_is_refused(before):
+    # REBOUND's add_variation() moves the variational particles' array: the
+    # step wrote into the freed one ("realloc(): invalid next size", a
+    # hostile trial). Refused, t and the real particles restored.
+    sim = sun_and_planet(stages=8, epsilon=1e-6)
+    for _ in range(before):
+        sim.add_variation().particles[1].x = 1e-3
+    on_call(sim, 5, lambda s: s.add_variation())
+    sim.force_is_velocity_dependent = 0
+    with pytest.raises(RuntimeError, match=r"a callback changed the variational particles \(N_var from "
+                                           rf"{2 * before} to {2 * before + 2}\)"):
+        sim.integrate(1.0)
+    reference = sun_and_planet(stages=8, epsilon=1e-6)
+    reference.additional_forces = lambda simp: None
+    reference.force_is_velocity_dependent = 0
+    if sim.integrator.n_steps:
+        reference.steps(sim.integrator.n_steps)
+    assert state(sim) == state(reference)
+
+
 @pytest.mark.parametrize("kind", ["int", "numpy", "0-d array"])
 @pytest.mark.parametrize("field, value", [("stages", 2**32 + 4), ("fitting", 2**32 + 3), ("stages", 2**31),
                                           ("stages", -2**31 - 1)])

@@ -945,6 +945,7 @@ enum pfvi_fault_kind {
     PFVI_FAULT_UNSOLVED,        // t0, rounds: trials, h, value: F
     PFVI_FAULT_UNSTABLE,        // particle, h, n, value: omega, bound: its pull's frequency, growth: factor per step - 1
     PFVI_FAULT_CALLBACK_CHANGED,// t: a callback replaced additional_forces, gravity_custom or extras
+    PFVI_FAULT_VARIATIONS_CHANGED, // t, n: N_var before, particle: N_var after (a callback added or removed variations)
     PFVI_FAULT_PARTICLE_EDITED, // t, particle (SIZE_MAX: t itself), flag: which field (pfvi_written_fields), n: 1 for a variational particle
     PFVI_FAULT_UNRESOLVED_FIXED,// particle, h, t0, value: the error per orbit the stages imply, bound: |h| sigma (0: not measured)
     PFVI_FAULT_VARIATIONAL,     // particle: the variational particle (index in particles_var), n: its real particle, flag: field (PFVI_WRITTEN_FIELDS), value, t0

@@ -667,6 +667,11 @@ static void pfvi_report(struct reb_simulation* r, const struct pfvi_state* st){
                     "(force evaluation at t = %.17g); step not taken, state restored. Change them between "
                     "steps (a heartbeat, or between integrate() calls).", f->t);
             break;
+        case PFVI_FAULT_VARIATIONS_CHANGED:
+            pfvi_error(r, "pfvi: a callback changed the variational particles (N_var from %zu to %zu) during the "
+                    "force evaluation at t = %.17g; step not taken, t and the real particles restored. Add "
+                    "variations between steps (a heartbeat, or between integrate() calls).", f->n, f->particle, f->t);
+            break;
         case PFVI_FAULT_PARTICLE_EDITED:
             if (f->particle == SIZE_MAX){
                 pfvi_error(r, "pfvi: a callback changed sim.t during the step (force evaluation at t = %.17g); "

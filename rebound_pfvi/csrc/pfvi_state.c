@@ -895,6 +895,14 @@ static int update_forces(struct reb_simulation* r, struct pfvi_state* st, size_t
         pfvi_roll_back_changed_N(r, st, N, t0);
         return 0;
     }
+    if (r->N_var != st->var_N && (st->var_N || guarded)){
+        // (REBOUND moved the variational particles' array: the step's
+        // pointers into it are stale, and their start does not fit it.)
+        st->fault = (struct pfvi_fault){.kind = PFVI_FAULT_VARIATIONS_CHANGED, .n = st->var_N, .particle = r->N_var,
+            .t = t};
+        pfvi_roll_back(r, st, N, t0);
+        return 0;
+    }
     if (pfvi_rebound_error_since(r, errors)){
         // An error inside the forces (a REBOUNDx effect without its
         // parameter, a callback calling reb_simulation_error): the forces
