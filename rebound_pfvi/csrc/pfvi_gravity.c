@@ -169,6 +169,32 @@ static inline __attribute__((always_inline)) void all_pairs(const struct reb_par
     }
 }
 
+// Positions x[i][k] of n bodies into lanes X[i][c][l], lane l holding stage
+// l and lanes outside k0 .. k1 the nearest stage (finite values, computed
+// and dropped; each lane's stage chosen once, not per component and body),
+// and the sums A zeroed (stores of vectors, not memset: its rep stosb
+// counts a byte an instruction under callgrind).
+static inline __attribute__((always_inline)) void stages_into_lanes(size_t n, const double (*x)[PFVI_STAGES_MAX][3],
+        double (*restrict X)[3][LANES], double (*restrict A)[3][LANES], int k0, int k1){
+    int stage_of[LANES];
+    for (int l=0; l<LANES; l++){
+        stage_of[l] = (l < k0) ? k0 : (l > k1) ? k1 : l;
+    }
+    const pfvi_lanes zero = {0., 0., 0., 0.};
+    for (size_t i=0; i<n; i++){
+        for (int l=0; l<LANES; l++){
+            const int k = stage_of[l];
+            X[i][0][l] = x[i][k][0];
+            X[i][1][l] = x[i][k][1];
+            X[i][2][l] = x[i][k][2];
+        }
+        for (int c=0; A && c<3; c++){
+            memcpy(&A[i][c][0], &zero, sizeof(zero));
+            memcpy(&A[i][c][4], &zero, sizeof(zero));
+        }
+    }
+}
+
 // Compiled twice, for AVX2 (4 lanes a vector) and for any x86-64 (SSE2, 2),
 // chosen by the processor at load time; elsewhere once. No FMA either way.
 PFVI_VECTOR_CLONES
@@ -180,28 +206,7 @@ int pfvi_gravity_stages(const struct reb_simulation* r, struct pfvi_state* st, s
     const size_t N_active = (r->N_active == SIZE_MAX) ? N : r->N_active;
     double (*restrict X)[3][LANES] = st->gravity_x;
     double (*restrict A)[3][LANES] = st->gravity_a;
-    // Lane l holds stage l; lanes outside k0 .. k1 repeat the nearest
-    // stage (finite values, computed and dropped). (Each lane's stage
-    // chosen once, not per component and body.)
-    int stage_of[LANES];
-    for (int l=0; l<LANES; l++){
-        stage_of[l] = (l < k0) ? k0 : (l > k1) ? k1 : l;
-    }
-    const pfvi_lanes zero = {0., 0., 0., 0.};
-    for (size_t i=0; i<N; i++){
-        for (int l=0; l<LANES; l++){
-            const int k = stage_of[l];
-            X[i][0][l] = x[i][k][0];
-            X[i][1][l] = x[i][k][1];
-            X[i][2][l] = x[i][k][2];
-        }
-        for (int c=0; c<3; c++){
-            // (stores of vectors, not memset: its rep stosb counts a byte an
-            // instruction under callgrind)
-            memcpy(&A[i][c][0], &zero, sizeof(zero));
-            memcpy(&A[i][c][4], &zero, sizeof(zero));
-        }
-    }
+    stages_into_lanes(N, x, X, A, k0, k1);
     // Stages within one block of 4 lanes (the end stage's pass alone; s <= 5)
     // take that block alone.
     const int pull = r->testparticle_type;
@@ -331,31 +336,8 @@ void pfvi_gravity_variational_stages(const struct reb_simulation* r, struct pfvi
     double (*restrict X)[3][LANES] = st->gravity_x;
     double (*restrict D)[3][LANES] = st->var_gravity_x;
     double (*restrict DA)[3][LANES] = st->var_gravity_a;
-    int stage_of[LANES];
-    for (int l=0; l<LANES; l++){
-        stage_of[l] = (l < k0) ? k0 : (l > k1) ? k1 : l;
-    }
-    for (size_t i=0; i<N; i++){
-        for (int l=0; l<LANES; l++){
-            const int k = stage_of[l];
-            X[i][0][l] = x[i][k][0];
-            X[i][1][l] = x[i][k][1];
-            X[i][2][l] = x[i][k][2];
-        }
-    }
-    const pfvi_lanes zero = {0., 0., 0., 0.};
-    for (size_t v=0; v<st->var_N; v++){
-        for (int l=0; l<LANES; l++){
-            const int k = stage_of[l];
-            D[v][0][l] = dx[v][k][0];
-            D[v][1][l] = dx[v][k][1];
-            D[v][2][l] = dx[v][k][2];
-        }
-        for (int c=0; c<3; c++){
-            memcpy(&DA[v][c][0], &zero, sizeof(zero));
-            memcpy(&DA[v][c][4], &zero, sizeof(zero));
-        }
-    }
+    stages_into_lanes(N, x, X, NULL, k0, k1);
+    stages_into_lanes(st->var_N, dx, D, DA, k0, k1);
     const double (*const Xc)[3][LANES] = (const double (*)[3][LANES])X;
     for (size_t set=0; set<st->var_sets_N; set++){
         const size_t first = st->var_sets[set];

@@ -258,54 +258,10 @@ static void stage_points(struct pfvi_state* st, size_t N, int k_first, int k_las
     }
 }
 
-static int stage_forces_own(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
-        int k_first, int k_last){
-    stage_points(st, N, k_first, k_last);
-    // (finite: pfvi_update_acceleration's check, made in the gravity's lanes)
-    if (!pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a,
-            k_first, k_last)){
-        return 0;
-    }
-    st->statistics.n_force_evaluations += (uint64_t)(k_last - k_first + 1);
-    struct reb_particle* const ps = r->particles;
-    for (size_t i=0; i<N; i++){
-        const double* const x = st->stage_x[i][k_last];
-        const double* const a = st->stage_a[i][k_last];
-        ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
-        ps[i].ax = a[0]; ps[i].ay = a[1]; ps[i].az = a[2];
-    }
-    r->t = t0 + st->rule.c[k_last]*h;
-    return 1;
-}
-
-// stage_forces where REBOUND would compute its basic gravity and its basic
-// variational gravity alone (MEGNO's variations, add_variation()'s): the
-// real forces as stage_forces_own's (with real = 0 the real particles'
-// stage points are their converged ones, in stage_x: the variational
-// particles' tangent solve goes on alone), then the variational particles'
-// at their tangent stage points in one pass (pfvi_gravity.c), and the
-// particles and t left as REBOUND's trips leave them. 0 where a real force
-// is not finite (REBOUND's path then names it).
-static int stage_forces_own_variational(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
-        double h, int real, int k_first, int k_last){
-    const int s = st->rule.s;
-    const size_t nv = st->var_N;
-    if (real){
-        stage_points(st, N, k_first, k_last);
-        if (!pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a,
-                k_first, k_last)){
-            return 0;
-        }
-    }
-    for (size_t v=0; v<nv; v++){
-        for (int k=k_first; k<=k_last; k++){
-            stage_position(&st->stage_fit[st->var_real[v]], &st->var_stage_start[v], &var_compensation, NULL,
-                    (const double (*)[3])st->var_unknowns[v], s, k, st->var_stage_x[v][k]);
-        }
-    }
-    pfvi_gravity_variational_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x,
-            (const double (*)[PFVI_STAGES_MAX][3])st->var_stage_x, st->var_stage_a, k_first, k_last);
-    st->statistics.n_force_evaluations += (uint64_t)(k_last - k_first + 1);
+// The particles (the variational ones with nv > 0) and t as REBOUND's trip
+// to stage k_last leaves them: its positions and forces.
+static void particles_at_stage(struct reb_simulation* r, const struct pfvi_state* st, size_t N, size_t nv,
+        double t0, double h, int k_last){
     struct reb_particle* const ps = r->particles;
     for (size_t i=0; i<N; i++){
         const double* const x = st->stage_x[i][k_last];
@@ -321,6 +277,57 @@ static int stage_forces_own_variational(struct reb_simulation* r, struct pfvi_st
         pv[v].ax = a[0]; pv[v].ay = a[1]; pv[v].az = a[2];
     }
     r->t = t0 + st->rule.c[k_last]*h;
+}
+
+// The variational particles' tangent stage points k_first .. k_last into
+// var_stage_x, and REBOUND's variational gravity there, at the real stage
+// points of stage_x, into var_stage_a (pfvi_gravity.c).
+static void variational_stage_forces(const struct reb_simulation* r, struct pfvi_state* st, size_t N,
+        int k_first, int k_last){
+    const int s = st->rule.s;
+    for (size_t v=0; v<st->var_N; v++){
+        for (int k=k_first; k<=k_last; k++){
+            stage_position(&st->stage_fit[st->var_real[v]], &st->var_stage_start[v], &var_compensation, NULL,
+                    (const double (*)[3])st->var_unknowns[v], s, k, st->var_stage_x[v][k]);
+        }
+    }
+    pfvi_gravity_variational_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x,
+            (const double (*)[PFVI_STAGES_MAX][3])st->var_stage_x, st->var_stage_a, k_first, k_last);
+}
+
+static int stage_forces_own(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
+        int k_first, int k_last){
+    stage_points(st, N, k_first, k_last);
+    // (finite: pfvi_update_acceleration's check, made in the gravity's lanes)
+    if (!pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a,
+            k_first, k_last)){
+        return 0;
+    }
+    st->statistics.n_force_evaluations += (uint64_t)(k_last - k_first + 1);
+    particles_at_stage(r, st, N, 0, t0, h, k_last);
+    return 1;
+}
+
+// stage_forces where REBOUND would compute its basic gravity and its basic
+// variational gravity alone (MEGNO's variations, add_variation()'s): the
+// real forces as stage_forces_own's (with real = 0 the real particles'
+// stage points are their converged ones, in stage_x: the variational
+// particles' tangent solve goes on alone), then the variational particles'
+// at their tangent stage points in one pass (pfvi_gravity.c), and the
+// particles and t left as REBOUND's trips leave them. 0 where a real force
+// is not finite (REBOUND's path then names it).
+static int stage_forces_own_variational(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0,
+        double h, int real, int k_first, int k_last){
+    if (real){
+        stage_points(st, N, k_first, k_last);
+        if (!pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, st->stage_a,
+                k_first, k_last)){
+            return 0;
+        }
+    }
+    variational_stage_forces(r, st, N, k_first, k_last);
+    st->statistics.n_force_evaluations += (uint64_t)(k_last - k_first + 1);
+    particles_at_stage(r, st, N, st->var_N, t0, h, k_last);
     return 1;
 }
 
@@ -387,15 +394,8 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
         }
         given = pfvi_gravity_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x, real_a,
             k_start, k_last);
-        for (size_t v=0; given && v<nv; v++){
-            for (int k=k_start; k<=k_last; k++){
-                stage_position(&st->stage_fit[st->var_real[v]], &st->var_stage_start[v], &var_compensation, NULL,
-                        (const double (*)[3])st->var_unknowns[v], s, k, st->var_stage_x[v][k]);
-            }
-        }
         if (given){
-            pfvi_gravity_variational_stages(r, st, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x,
-                    (const double (*)[PFVI_STAGES_MAX][3])st->var_stage_x, st->var_stage_a, k_start, k_last);
+            variational_stage_forces(r, st, N, k_start, k_last);
         }
     }
     for (int k=k_start; k<=k_last; k++){
