@@ -1093,6 +1093,12 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
         residual = (final || !newton) ? change_of(st, N) : NAN;
         if (residual == 0. || (final && residual <= PFVI_SOLVE_CONFIRM)){
             converged = 1;
+            if (st->var_N){
+                // The variational particles' round corrected as every
+                // round's is: their own solve goes on from it.
+                pfvi_newton_correct_variational(st, N);
+                ops->variational_change(st);
+            }
             break;
         }
         if (!newton && !isfinite(residual)){

@@ -469,11 +469,12 @@ static int stage_forces(struct reb_simulation* r, struct pfvi_state* st, size_t 
 // from the two-body predictor of pfvi_solve.c, which extrapolates only the
 // forces beyond each body's partner, from the last step's stages).
 // With tangent_only (a classical step whose first iterate the two-body
-// predictor draws) the stages beyond the start would be only placeholders,
-// overwritten unread: stages 1 .. s-2 by the solve's first forces, the end
-// by the converged step's (the classical round does not read it; a solve
-// that fails leaves no retry): only the start is written, and no
-// polynomial is evaluated.
+// predictor draws) the real particles' stages beyond the start would be
+// only placeholders, overwritten unread: stages 1 .. s-2 by the solve's
+// first forces, the end by the converged step's (the classical round does
+// not read it; a solve that fails leaves no retry): only the start is
+// written, and their polynomial is not evaluated. The variational
+// particles' stages are drawn either way.
 static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h, int tangent_only){
     const struct pfvi_lobatto* const rule = &st->rule;
     const int s = rule->s;
@@ -486,8 +487,11 @@ static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h, i
     const int extrapolate = !retry && st->predictor_stages == s && st->predictor_N == N && st->predictor_t == t0
         && st->predictor_h != 0. && fabs(h) <= ratio_max*fabs(st->predictor_h);
     const int polynomial = retry || (extrapolate && !tangent_only);
+    const int var_retry = retry && st->var_retry_valid;
+    const int var_extrapolate = extrapolate && st->var_predictor_N == st->var_N;
+    const int var_polynomial = var_retry || var_extrapolate;
     double x[PFVI_STAGES_MAX][PFVI_STAGES_MAX];
-    if (polynomial){
+    if (polynomial || (st->var_N && var_polynomial)){
         // x[j][m] = l_m(tau_j): the Lagrange basis of the source's nodes at
         // this step's, in units of the source's step (which starts at t0 for
         // a retry, and ends there for the last step).
@@ -532,9 +536,6 @@ static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h, i
     }
     // The variational particles' stages, from their own last trial or step
     // along the same polynomial, where they were taken with these particles.
-    const int var_retry = retry && st->var_retry_valid;
-    const int var_extrapolate = extrapolate && st->var_predictor_N == st->var_N;
-    const int var_polynomial = var_retry || var_extrapolate;
     for (size_t v=0; v<st->var_N; v++){
         double source[PFVI_STAGES_MAX][3], source_x[PFVI_STAGES_MAX][3];
         for (int m=0; m<s; m++){
@@ -728,6 +729,13 @@ static void var_round(struct pfvi_state* st, size_t v, int s, double h, const do
     }
 }
 
+// The variational particles' next iterate becomes their current one.
+static void var_unknowns_swap(struct pfvi_state* st){
+    double (*swap)[PFVI_STAGES_MAX-1][3] = st->var_unknowns;
+    st->var_unknowns = st->var_unknowns_next;
+    st->var_unknowns_next = swap;
+}
+
 // The largest relative change of the variational particles' unknowns in a
 // round, measured as the real solve measures its own (a NaN is kept).
 static double var_change(const struct pfvi_state* st, int s){
@@ -789,32 +797,52 @@ static void var_velocity_change(const struct pfvi_state* st, size_t v, int s, do
 // points, whose stage values are kept) until it too stops; then their end
 // state, and MEGNO's increments over the stages. Returns 0 (rolled back,
 // fault recorded) if a force evaluation failed.
+// It stops by the real solve's rule (pfvi_solve_verdict): once the rate of
+// its corrections says the corrected iterate is within the doubles'
+// resolution, one final round, whose own change must be at most
+// PFVI_SOLVE_CONFIRM, confirms it, and the iterate its forces were
+// evaluated at is taken; a change that stops falling is the round-off
+// floor (converged at most PFVI_ITERATION_TOLERANCE). Its equations are
+// linear in the variations, but their coefficients are the real stages':
+// the real solve's last rounds leave it a round behind.
 static int stages_advance_variational(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
         const double* hb, double change, double previous, int rounds){
     const struct pfvi_lobatto* const rule = &st->rule;
     const int s = rule->s;
     const size_t nv = st->var_N;
     struct reb_particle* const pv = r->particles_var;
-    enum pfvi_iteration verdict = pfvi_iteration_verdict(change, previous, rounds >= PFVI_ITERATION_MAX);
     const uint64_t evaluations = st->statistics.n_force_evaluations;
-    while (verdict == PFVI_ITERATE){
-        double (*swap)[PFVI_STAGES_MAX-1][3] = st->var_unknowns;
-        st->var_unknowns = st->var_unknowns_next;
-        st->var_unknowns_next = swap;
+    int converged = 0, final = 0, stalled = 0;
+    for (;;){
+        const enum pfvi_solve_next next = pfvi_solve_verdict(change, previous, stalled, rounds >= PFVI_ITERATION_MAX);
+        stalled = (next == PFVI_SOLVE_STALLED);
+        if (next == PFVI_SOLVE_CONVERGED || next == PFVI_SOLVE_FAILED || next == PFVI_SOLVE_DIVERGING){
+            converged = (next == PFVI_SOLVE_CONVERGED) || (next == PFVI_SOLVE_DIVERGING && change <= PFVI_ITERATION_TOLERANCE);
+            break;
+        }
+        final = final || (next == PFVI_SOLVE_FINAL);
+        var_unknowns_swap(st);
         if (!stage_forces(r, st, N, t0, h, 0, 1, s - 1)){
             return 0;
         }
         rounds++;
-        previous = change;
         for (size_t v=0; v<nv; v++){
             var_round(st, v, s, h, hb);
         }
+        if (final){
+            const double residual = var_change(st, s);
+            if (residual <= PFVI_SOLVE_CONFIRM){
+                converged = 1;
+                break;
+            }
+            final = 0;
+        }
+        previous = change;
         pfvi_newton_correct_variational(st, N);
         change = var_change(st, s);
-        verdict = pfvi_iteration_verdict(change, previous, rounds >= PFVI_ITERATION_MAX);
     }
     st->trial.variational_evaluations = st->statistics.n_force_evaluations - evaluations;
-    st->trial.variational_unconverged = (verdict != PFVI_CONVERGED);
+    st->trial.variational_unconverged = !converged;
     st->var_retry_valid = st->retry_allowed;
 
     // The end state: x from the last stage point, v from p_k+1 (kept in var_dv).
@@ -894,6 +922,19 @@ static int stages_advance_variational(struct reb_simulation* r, struct pfvi_stat
     return 1;
 }
 
+// One round for every variational particle, their change kept for their
+// own verdict.
+static void variational_rounds(struct pfvi_state* st, double h, const double* hb){
+    const int s = st->rule.s;
+    if (st->var_N){
+        for (size_t v=0; v<st->var_N; v++){
+            var_round(st, v, s, h, hb);
+        }
+        st->var_solve_previous = st->var_solve_change;
+        st->var_solve_change = var_change(st, s);
+    }
+}
+
 // One round for every real and variational particle: unknowns_next from
 // the forces at the stage points of unknowns; the variational particles'
 // change is kept for their own verdict (they never enter the real one).
@@ -915,13 +956,7 @@ static void stage_rounds(struct pfvi_state* st, size_t N, double h){
                     (const double (*)[3])st->stage_a[i], (const double (*)[3])st->stage_x[i], st->unknowns_next[i]);
         }
     }
-    if (st->var_N){
-        for (size_t v=0; v<st->var_N; v++){
-            var_round(st, v, s, h, hb);
-        }
-        st->var_solve_previous = st->var_solve_change;
-        st->var_solve_change = var_change(st, s);
-    }
+    variational_rounds(st, h, hb);
 }
 
 static int stage_solve_forces(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
@@ -984,11 +1019,11 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
     for (size_t v=0; v<nv; v++){
         stage_start_of(rule, &st->stage_fit[st->var_real[v]], &st->var_start[v], &var_centre, h, &st->var_stage_start[v]);
     }
-    // Every particle in the classical form (no variations, no velocity-
-    // dependent force): unless this is a retry, the solve's two-body
-    // predictor draws the whole first iterate, and the extrapolated stages
-    // and their round would be overwritten unread.
-    int classical = (nv == 0) && !r->force_is_velocity_dependent;
+    // Every real particle in the classical form (no velocity-dependent
+    // force): unless this is a retry, the solve's two-body predictor draws
+    // their whole first iterate, and their extrapolated stages and round
+    // would be overwritten unread (the variational particles' are not).
+    int classical = !r->force_is_velocity_dependent;
     for (size_t i=0; classical && i<N; i++){
         classical = st->stage_fit[i].classical;
     }
@@ -1004,6 +1039,9 @@ static enum pfvi_trial stages_advance(struct reb_simulation* r, struct pfvi_stat
     if (!classical || predicted == PFVI_PREDICTED_RETRY){
         stage_rounds(st, N, h);
         pfvi_solve_swap(st);
+    }else if (nv){
+        variational_rounds(st, h, hb);
+        var_unknowns_swap(st);
     }
     st->var_solve_change = INFINITY;
     st->var_solve_previous = INFINITY;
