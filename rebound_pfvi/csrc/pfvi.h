@@ -1638,7 +1638,7 @@ PFVI_INTERNAL void pfvi_gravity_variational_stages(const struct reb_simulation* 
         double (*da)[PFVI_STAGES_MAX][3], int k0, int k1);
 PFVI_INTERNAL void pfvi_track_added(struct pfvi_state* st);
 PFVI_INTERNAL void pfvi_track_removed(struct pfvi_state* st, size_t index);
-// The iteration rule shared by every fixed-point iteration.
+// The stopping rule of the two-point step's implicit kick (velocity-dependent forces).
 enum pfvi_iteration { PFVI_ITERATE = 0, PFVI_CONVERGED = 1, PFVI_FAILED = -1 };
 PFVI_INTERNAL enum pfvi_iteration pfvi_iteration_verdict(double change, double previous, int last_round);
 // Scratch for the n variational particles (grows only with n); 0 (fault recorded) if memory ran out.

@@ -537,11 +537,13 @@ static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h, i
     // The variational particles' stages, from their own last trial or step
     // along the same polynomial, where they were taken with these particles.
     for (size_t v=0; v<st->var_N; v++){
+        const int classical = st->stage_fit[st->var_real[v]].classical;
         double source[PFVI_STAGES_MAX][3], source_x[PFVI_STAGES_MAX][3];
         for (int m=0; m<s; m++){
             for (int c=0; c<3; c++){
                 source[m][c] = var_retry ? st->var_stage_a[v][m][c] : (var_extrapolate ? st->var_predictor_a[v][m][c] : 0.);
-                source_x[m][c] = var_retry ? st->var_stage_x[v][m][c] : (var_extrapolate ? st->var_predictor_x[v][m][c] : 0.);
+                source_x[m][c] = classical ? 0. : var_retry ? st->var_stage_x[v][m][c]
+                    : (var_extrapolate ? st->var_predictor_x[v][m][c] : 0.);
             }
         }
         const struct reb_particle* const p = &st->var_start[v];
@@ -555,12 +557,17 @@ static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h, i
                     st->var_stage_a[v][k][c] = a0[c];
                     st->var_stage_x[v][k][c] = (k == 0) ? q0[c] : q0[c] + t*(v0[c] + 0.5*t*a0[c]);
                 }else{
-                    double sum = 0., sum_x = 0.;
+                    double sum = 0.;
                     for (int m=0; m<s; m++){
                         sum += x[k][m]*source[m][c];
-                        sum_x += x[k][m]*source_x[m][c];
                     }
                     st->var_stage_a[v][k][c] = sum;
+                    // (the classical round reads no stage point: the first
+                    // forces put them where the round leaves the unknowns)
+                    double sum_x = 0.;
+                    for (int m=0; !classical && m<s; m++){
+                        sum_x += x[k][m]*source_x[m][c];
+                    }
                     st->var_stage_x[v][k][c] = sum_x;
                 }
             }
@@ -922,8 +929,9 @@ static int stages_advance_variational(struct reb_simulation* r, struct pfvi_stat
     return 1;
 }
 
-// One round for every variational particle, their change kept for their
-// own verdict.
+// One round for every variational particle. Their change for their own
+// verdict is the corrected round's (the solve's variational_change): the
+// last one becomes the one before.
 static void variational_rounds(struct pfvi_state* st, double h, const double* hb){
     const int s = st->rule.s;
     if (st->var_N){
@@ -931,7 +939,6 @@ static void variational_rounds(struct pfvi_state* st, double h, const double* hb
             var_round(st, v, s, h, hb);
         }
         st->var_solve_previous = st->var_solve_change;
-        st->var_solve_change = var_change(st, s);
     }
 }
 
@@ -992,8 +999,7 @@ static void stage_solve_start_at(struct pfvi_state* st, size_t N){
     }
 }
 
-// The variational particles' change after the solve corrected their round
-// (it replaces the round's own; the one before stays).
+// The variational particles' change after the solve corrected their round.
 static void stage_solve_variational_change(struct pfvi_state* st){
     st->var_solve_change = var_change(st, st->rule.s);
 }
