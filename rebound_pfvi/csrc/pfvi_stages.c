@@ -809,7 +809,7 @@ static void var_velocity_change(const struct pfvi_state* st, size_t v, int s, do
 // resolution, one final round, whose own change must be at most
 // PFVI_SOLVE_CONFIRM, confirms it, and the iterate its forces were
 // evaluated at is taken; a change that stops falling is the round-off
-// floor (converged at most PFVI_ITERATION_TOLERANCE). Its equations are
+// floor (converged if at most PFVI_ITERATION_TOLERANCE). Its equations are
 // linear in the variations, but their coefficients are the real stages':
 // the real solve's last rounds leave it a round behind.
 static int stages_advance_variational(struct reb_simulation* r, struct pfvi_state* st, size_t N, double t0, double h,
@@ -819,12 +819,17 @@ static int stages_advance_variational(struct reb_simulation* r, struct pfvi_stat
     const size_t nv = st->var_N;
     struct reb_particle* const pv = r->particles_var;
     const uint64_t evaluations = st->statistics.n_force_evaluations;
-    int converged = 0, final = 0, stalled = 0;
+    int converged = 0, final = 0;
     for (;;){
-        const enum pfvi_solve_next next = pfvi_solve_verdict(change, previous, stalled, rounds >= PFVI_ITERATION_MAX);
-        stalled = (next == PFVI_SOLVE_STALLED);
-        if (next == PFVI_SOLVE_CONVERGED || next == PFVI_SOLVE_FAILED || next == PFVI_SOLVE_DIVERGING){
-            converged = (next == PFVI_SOLVE_CONVERGED) || (next == PFVI_SOLVE_DIVERGING && change <= PFVI_ITERATION_TOLERANCE);
+        // (a change that stops falling at most PFVI_ITERATION_TOLERANCE is
+        // the floor at once: the real solve waits a second round there for
+        // velocity-dependent forces, which variations never have, and a
+        // second-order set's floor can rise and fall by turns above
+        // PFVI_SOLVE_CONFIRM, which would never give it two)
+        const enum pfvi_solve_next next = pfvi_solve_verdict(change, previous, 0, rounds >= PFVI_ITERATION_MAX);
+        if (next == PFVI_SOLVE_CONVERGED || next == PFVI_SOLVE_STALLED || next == PFVI_SOLVE_FAILED
+                || next == PFVI_SOLVE_DIVERGING){
+            converged = (next == PFVI_SOLVE_CONVERGED || next == PFVI_SOLVE_STALLED);
             break;
         }
         final = final || (next == PFVI_SOLVE_FINAL);
