@@ -87,5 +87,5 @@ def test_the_baseline_build_is_the_one_its_children_load(baseline_build):
 def test_vector_and_baseline_paths_give_the_same_bits(baseline_build, name):
     vector = same_bits.run([sys.executable], name)
     baseline = same_bits.run([f"PYTHONPATH={baseline_build}", sys.executable], name)
-    assert not isinstance(vector, dict), vector
-    assert vector == baseline
+    assert "error" not in vector, vector
+    assert vector == baseline   # the real trajectory and the variational particles
