@@ -258,24 +258,23 @@ static void stage_points(struct pfvi_state* st, size_t N, int k_first, int k_las
     }
 }
 
+// n particles at their stage k's positions x and forces a.
+static void particles_at(struct reb_particle* p, size_t n, const double (*x)[PFVI_STAGES_MAX][3],
+        const double (*a)[PFVI_STAGES_MAX][3], int k){
+    for (size_t i=0; i<n; i++){
+        p[i].x = x[i][k][0]; p[i].y = x[i][k][1]; p[i].z = x[i][k][2];
+        p[i].ax = a[i][k][0]; p[i].ay = a[i][k][1]; p[i].az = a[i][k][2];
+    }
+}
+
 // The particles (the variational ones with nv > 0) and t as REBOUND's trip
 // to stage k_last leaves them: its positions and forces.
 static void particles_at_stage(struct reb_simulation* r, const struct pfvi_state* st, size_t N, size_t nv,
         double t0, double h, int k_last){
-    struct reb_particle* const ps = r->particles;
-    for (size_t i=0; i<N; i++){
-        const double* const x = st->stage_x[i][k_last];
-        const double* const a = st->stage_a[i][k_last];
-        ps[i].x = x[0]; ps[i].y = x[1]; ps[i].z = x[2];
-        ps[i].ax = a[0]; ps[i].ay = a[1]; ps[i].az = a[2];
-    }
-    struct reb_particle* const pv = r->particles_var;
-    for (size_t v=0; v<nv; v++){
-        const double* const x = st->var_stage_x[v][k_last];
-        const double* const a = st->var_stage_a[v][k_last];
-        pv[v].x = x[0]; pv[v].y = x[1]; pv[v].z = x[2];
-        pv[v].ax = a[0]; pv[v].ay = a[1]; pv[v].az = a[2];
-    }
+    particles_at(r->particles, N, (const double (*)[PFVI_STAGES_MAX][3])st->stage_x,
+            (const double (*)[PFVI_STAGES_MAX][3])st->stage_a, k_last);
+    particles_at(r->particles_var, nv, (const double (*)[PFVI_STAGES_MAX][3])st->var_stage_x,
+            (const double (*)[PFVI_STAGES_MAX][3])st->var_stage_a, k_last);
     r->t = t0 + st->rule.c[k_last]*h;
 }
 
@@ -542,8 +541,7 @@ static int stage_predict(struct pfvi_state* st, size_t N, double t0, double h, i
         for (int m=0; m<s; m++){
             for (int c=0; c<3; c++){
                 source[m][c] = var_retry ? st->var_stage_a[v][m][c] : (var_extrapolate ? st->var_predictor_a[v][m][c] : 0.);
-                source_x[m][c] = classical ? 0. : var_retry ? st->var_stage_x[v][m][c]
-                    : (var_extrapolate ? st->var_predictor_x[v][m][c] : 0.);
+                source_x[m][c] = var_retry ? st->var_stage_x[v][m][c] : (var_extrapolate ? st->var_predictor_x[v][m][c] : 0.);
             }
         }
         const struct reb_particle* const p = &st->var_start[v];
@@ -948,8 +946,9 @@ static void variational_rounds(struct pfvi_state* st, double h, const double* hb
 }
 
 // One round for every real and variational particle: unknowns_next from
-// the forces at the stage points of unknowns; the variational particles'
-// change is kept for their own verdict (they never enter the real one).
+// the forces at the stage points of unknowns (the variational particles'
+// change is measured once the solve has corrected their round, for their
+// own verdict: they never enter the real one).
 static void stage_rounds(struct pfvi_state* st, size_t N, double h){
     const struct pfvi_lobatto* const rule = &st->rule;
     const int s = rule->s;
