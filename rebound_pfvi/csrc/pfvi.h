@@ -784,9 +784,16 @@ PFVI_INTERNAL int pfvi_step_density(const struct reb_particle* p, const struct p
 // leading coefficient of the polynomial through the values f[k] (the stage
 // accelerations, or what a fitted step's quadrature carries of them;
 // weights: the barycentric weights of the nodes on [0, 1]) and A the largest
-// of the |a[k]| and scale2^(1/2); 0 if that is 0.
-PFVI_INTERNAL double pfvi_stage_resolution(const double (*f)[3], const double (*a)[3], const double* weights, int s,
-        double scale2);
+// of the |a[k]| and scale2^(1/2); 0 if that is 0. The stages are measured
+// once (pfvi_stage_spread: |D|^2 and the largest |a[k]|^2) and the ratio
+// taken for each scale2 asked (pfvi_stage_resolution).
+struct pfvi_stage_spread {
+    double D2;          // |D|^2
+    double A2;          // the largest |a[k]|^2
+};
+PFVI_INTERNAL struct pfvi_stage_spread pfvi_stage_spread(const double (*f)[3], const double (*a)[3],
+        const double* weights, int s);
+PFVI_INTERNAL double pfvi_stage_resolution(const struct pfvi_stage_spread* spread, double scale2);
 // The square of the largest single pull G m_j/r^2 (softened; every
 // attracting body j != i and ghost image) on particle i of p; 0 without gravity.
 PFVI_INTERNAL double pfvi_largest_pull2(const struct reb_particle* p, size_t N, const struct pfvi_field* f, size_t i);

@@ -139,15 +139,14 @@ void pfvi_commit_step(struct reb_simulation* r, struct pfvi_state* st, size_t N,
 // this step. The stages are measured once (weak_pull_of) and the ratio
 // taken for each pull2 asked (a second one when the largest pull is
 // measured), so the stage loop runs once per particle; the same loop gives
-// the particle's net resolution against its stage accelerations
-// (pfvi_stage_resolution(a, a, weights, s, 0)), which it would otherwise
-// make again.
+// the spread of the particle's stage accelerations (pfvi_stage_spread(a, a,
+// weights, s)), which it would otherwise make again.
 struct weak_pull {
     int any;            // 0: no massive partner, the ratio is 0 (and net not measured)
     double A2;          // the largest stage acceleration's square
     double F2;          // the largest rest's (the pulls beyond the partner's) square
     double D[3];        // sum_k w_k rest_k (pfvi_stage_resolution's D of the rest)
-    double net;         // pfvi_stage_resolution(a, a, weights, s, 0.)
+    struct pfvi_stage_spread net;   // pfvi_stage_spread(a, a, weights, s)
 };
 
 // Component c of the stages k[0 .. 3] as lanes. (Always inlined, so the
@@ -165,7 +164,7 @@ static inline __attribute__((always_inline)) pfvi_lanes stage_lanes(const double
 // first stage (finite values): the largest squares are kept lane by lane
 // (a repeated stage changes no maximum, nor does the order: the squares are
 // never -0, and a NaN is passed over either way), and D's sums are taken
-// over the stages in order, as pfvi_stage_resolution takes them (D of the
+// over the stages in order, as pfvi_stage_spread takes them (D of the
 // rest and of a).
 PFVI_VECTOR_CLONES
 static void weak_pull_stages(const double (*xi)[3], const double (*xj)[3], const double (*a)[3], int s,
@@ -219,14 +218,14 @@ static void weak_pull_stages(const double (*xi)[3], const double (*xj)[3], const
     for (int c=0; c<3; c++){
         out->D[c] = D[c];
     }
-    out->net = (A2_max > 0.) ? sqrt((Da[0]*Da[0] + Da[1]*Da[1] + Da[2]*Da[2])/A2_max) : 0.;
+    out->net = (struct pfvi_stage_spread){Da[0]*Da[0] + Da[1]*Da[1] + Da[2]*Da[2], A2_max};
 }
 
 // (Inlined, as GCC did before the resolution's loop grew: as a call of its
 // own, 88 more instructions a step at N = 3; inlined, 7.)
 static inline __attribute__((always_inline)) struct weak_pull weak_pull_of(const struct reb_simulation* r, const struct pfvi_state* st, size_t N, size_t i,
         const struct pfvi_field* field, const double* weights, const double (*a)[3]){
-    struct weak_pull w = {0, 0., 0., {0., 0., 0.}, 0.};
+    struct weak_pull w = {0, 0., 0., {0., 0., 0.}, {0., 0.}};
     const struct pfvi_partner* const q = &st->partners[i];
     if (q->j >= N || q->j == i || q->image >= field->n_images || !(r->particles[q->j].m > 0.) || !(field->G > 0.)){
         return w;
@@ -255,7 +254,7 @@ static double weak_pull_ratio(const struct weak_pull* w, double pull2){
         return 0.;    // no weaker pull: the check against A covers it
     }
     // |D_p|/F from the rest's own stage values (pfvi_stage_resolution of the
-    // rest against itself: its largest square is F2).
+    // rest's spread against itself: its largest square is F2).
     const double dp = sqrt((w->D[0]*w->D[0] + w->D[1]*w->D[1] + w->D[2]*w->D[2])/F2);
     // Held PFVI_WEAK_PULL_MARGIN times below a Kepler orbit's error (the
     // error goes as the ratio squared).
@@ -296,8 +295,11 @@ struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, con
         // (The weak-pull check's stage loop measures the net resolution too.)
         const int weak_check = field && !residual && omega == 0. && st->partners;
         const struct weak_pull w = weak_check ? weak_pull_of(r, st, N, i, field, weights, (const double (*)[3])a)
-            : (struct weak_pull){0, 0., 0., {0., 0., 0.}, 0.};
-        double ratio = w.any ? w.net : pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, 0.);
+            : (struct weak_pull){0, 0., 0., {0., 0., 0.}, {0., 0.}};
+        // (the stages measured once; each ratio below is of this spread)
+        const struct pfvi_stage_spread spread = w.any ? w.net
+            : pfvi_stage_spread(values, (const double (*)[3])a, weights, s);
+        double ratio = pfvi_stage_resolution(&spread, 0.);
         double pull2 = -1.;    // the largest pull's square, once measured
         if (field && ratio > pull_above){
             // Unresolved against its net acceleration: measured against the
@@ -305,7 +307,7 @@ struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, con
             const double pull0 = pfvi_largest_pull2(st->start, N, field, i);
             const double pull1 = pfvi_largest_pull2(r->particles, N, field, i);
             pull2 = fmax(pull0, pull1);
-            ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, pull2);
+            ratio = pfvi_stage_resolution(&spread, pull2);
         }
         worst.own = (ratio > worst.own || ratio != ratio) ? ratio : worst.own;
         for (int k=1; motion > 0. && !worst.varies && k<s; k++){
@@ -324,7 +326,7 @@ struct pfvi_resolution pfvi_trial_resolution(const struct reb_simulation* r, con
             const double v2 = fmax(p0->vx*p0->vx + p0->vy*p0->vy + p0->vz*p0->vz,
                 p1->vx*p1->vx + p1->vy*p1->vy + p1->vz*p1->vz);
             const double floor2 = motion*motion*v2/(h*h);
-            ratio = pfvi_stage_resolution(values, (const double (*)[3])a, weights, s, fmax(pull2, floor2));
+            ratio = pfvi_stage_resolution(&spread, fmax(pull2, floor2));
         }
         if (weak_check){
             const double weak = weak_pull_ratio(&w, pull2);

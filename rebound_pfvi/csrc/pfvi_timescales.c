@@ -791,7 +791,7 @@ int pfvi_step_density(const struct reb_particle* p, const struct pfvi_end_state*
     return isfinite(*sigma) && isfinite(*dlog_sigma);
 }
 
-double pfvi_stage_resolution(const double (*f)[3], const double (*a)[3], const double* weights, int s, double scale2){
+struct pfvi_stage_spread pfvi_stage_spread(const double (*f)[3], const double (*a)[3], const double* weights, int s){
     double D[3] = {0., 0., 0.}, A2 = 0.;
     for (int k=0; k<s; k++){
         for (int c=0; c<3; c++){
@@ -800,11 +800,15 @@ double pfvi_stage_resolution(const double (*f)[3], const double (*a)[3], const d
         const double a2 = a[k][0]*a[k][0] + a[k][1]*a[k][1] + a[k][2]*a[k][2];
         A2 = (a2 > A2) ? a2 : A2;
     }
-    A2 = (scale2 > A2) ? scale2 : A2;
+    return (struct pfvi_stage_spread){D[0]*D[0] + D[1]*D[1] + D[2]*D[2], A2};
+}
+
+double pfvi_stage_resolution(const struct pfvi_stage_spread* spread, double scale2){
+    const double A2 = (scale2 > spread->A2) ? scale2 : spread->A2;
     if (!(A2 > 0.)){
         return 0.;
     }
-    return sqrt((D[0]*D[0] + D[1]*D[1] + D[2]*D[2])/A2);
+    return sqrt(spread->D2/A2);
 }
 
 double pfvi_largest_pull2(const struct reb_particle* p, size_t N, const struct pfvi_field* f, size_t i){
