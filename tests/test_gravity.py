@@ -11,6 +11,7 @@ through REBOUND stage by stage. A test particle's variation forces
 REBOUND's path without changing the real particles' trajectory, so the two
 runs must agree bit for bit: the same terms summed in the same order.
 """
+import ctypes
 import math
 
 import pytest
@@ -166,6 +167,69 @@ def test_routes_that_need_rebound_still_work():
         assert math.dist(sim.particles[2].xyz, ref.particles[2].xyz) < 1e-8
         if var is not None:
             assert math.dist(var.particles[0].xyz, rvar.particles[0].xyz) < 1e-6 * math.hypot(*rvar.particles[0].xyz)
+
+
+def two_bodies(change=None, m=1e-3):
+    def build():
+        sim = rebound.Simulation()
+        sim.add(m=1.0)
+        sim.add(m=m, a=1.0, e=0.6, inc=0.2)
+        if change:
+            change(sim)
+        sim.move_to_com()
+        return sim
+    return build
+
+
+def pulled(sim):
+    def push(reb_sim):
+        sim.particles[1].ax += 1e-3
+    sim.additional_forces = push
+
+
+def ghosts(sim):
+    sim.root_size = 20.0
+    sim.boundary = "periodic"
+    sim.N_ghost_x = sim.N_ghost_y = 1
+
+
+def third(sim):
+    sim.add(m=1e-6, a=2.0)
+
+
+def active_one(sim):
+    sim.N_active = 1
+    sim.testparticle_type = 1
+
+
+# (whose only force is their mutual pull: the predictor's rest is round-off)
+@pytest.mark.parametrize("build, alone", [
+    (two_bodies(), True), (two_bodies(m=0.0), True), (two_bodies(lambda sim: setattr(sim, "softening", 0.05)), True),
+    (two_bodies(lambda sim: sim.init_megno(seed=1)), True),
+    (two_bodies(third), False), (two_bodies(pulled), False), (two_bodies(ghosts), False),
+    (two_bodies(active_one), False), (two_bodies(lambda sim: setattr(sim, "gravity", "compensated")), False),
+    (two_bodies(lambda sim: setattr(sim, "gravity", "none")), False)],
+    ids=["pair", "test-particle", "softened", "megno", "three", "force", "ghost-boxes", "N_active-1", "compensated",
+         "no-gravity"])
+def test_the_predictor_takes_two_bodies_alone_only_where_nothing_else_acts(build, alone):
+    """Two bodies whose only force is their mutual pull: each body's
+    acceleration is the pair's Kepler pull about a barycentre that moves
+    uniformly, so the predictor extrapolates no rest beside it (what it
+    would extrapolate is round-off). Anything else acting (a third body,
+    a force, ghost images, a body outside N_active that pulls without being
+    pulled, another gravity module) keeps the rest. The runs end where
+    IAS15's do."""
+    sim = build()
+    sim.integrator = "pfvi"
+    assert rebound_pfvi._lib.pfvi_two_alone(ctypes.byref(sim)) == int(alone)
+    sim.integrator.epsilon = 1e-10
+    ref = build()
+    ref.integrator = "ias15"
+    ref.integrator.epsilon = 1e-11
+    t = 4.0 * 2.0 * math.pi
+    sim.integrate(t)
+    ref.integrate(sim.t, exact_finish_time=1)
+    assert math.dist(sim.particles[1].xyz, ref.particles[1].xyz) < 1e-8
 
 
 def with_variations(kind):

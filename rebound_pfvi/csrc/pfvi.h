@@ -800,6 +800,9 @@ PFVI_INTERNAL double pfvi_largest_pull2(const struct reb_particle* p, size_t N, 
 // Inspection (tests): each particle's partner in the simulation as it stands
 // (out[i] = N: none); 0 if memory ran out.
 PFVI_API int pfvi_partners(struct reb_simulation* r, size_t* out);
+// Inspection (tests): whether the predictor takes the real particles as two
+// bodies alone (pfvi_gravity_two_alone), without a rest to extrapolate.
+PFVI_API int pfvi_two_alone(struct reb_simulation* r);
 // Inspection (tests): out = (sigma, d log(sigma)/dt) of the symmetric control
 // for s stages at the simulation as it stands (its accelerations are
 // evaluated); 0 without pairs.
@@ -1624,6 +1627,13 @@ PFVI_INTERNAL void pfvi_warning(struct reb_simulation* r, const char* fmt, ...) 
 // into a in one pass, bit for bit as REBOUND would stage by stage; 0 if a
 // force is not finite (a is written all the same).
 PFVI_INTERNAL int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st, size_t N);
+// Whether the real particles are two bodies whose only force is their
+// mutual pull (REBOUND's basic gravity between two active bodies, no ghost
+// boxes, nothing added; variational particles may be there): each body's
+// acceleration is then the pair's Kepler pull about their barycentre,
+// which moves uniformly, and what the predictor would call the rest of it
+// is round-off.
+PFVI_INTERNAL int pfvi_gravity_two_alone(const struct reb_simulation* r, size_t N);
 // Whether REBOUND's routine would compute its basic gravity and then call
 // additional forces (a force callback, REBOUNDx's): the gravity can be
 // pfvi_gravity_stages', the forces called at each stage beside it.
@@ -1729,9 +1739,11 @@ PFVI_INTERNAL enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct
         double t0, double h, const struct pfvi_solve_ops* ops, int predicted);
 // The two-body predictor: each body's stage points (solve_x) along its
 // two-body orbit about its partner, mutual pairs about their barycentre,
-// the rest of the acceleration held at its start value.
+// the rest of the acceleration extrapolated from the last step's stages
+// (extrapolate) or held at its start value; with rest = 0 no rest at all
+// (two bodies alone, pfvi_gravity_two_alone: the rest is round-off).
 PFVI_INTERNAL void pfvi_solve_predict(struct pfvi_state* st, size_t N, const struct pfvi_field* field, double h,
-        int extrapolate);
+        int extrapolate, int rest);
 
 /* ------------------------------------------------------- schemes and step */
 

@@ -59,6 +59,12 @@ int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st
     return basic_gravity(r, st, N) && r->additional_forces == NULL;
 }
 
+int pfvi_gravity_two_alone(const struct reb_simulation* r, size_t N){
+    return N == 2 && basic_real_gravity(r, N) && r->additional_forces == NULL
+        && r->N_ghost_x == 0 && r->N_ghost_y == 0 && r->N_ghost_z == 0
+        && (r->N_active == SIZE_MAX || r->N_active >= N);
+}
+
 int pfvi_gravity_own_beside_forces(const struct reb_simulation* r, const struct pfvi_state* st, size_t N){
     return basic_gravity(r, st, N) && r->additional_forces != NULL;
 }

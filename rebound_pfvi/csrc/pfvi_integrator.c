@@ -1891,6 +1891,10 @@ int pfvi_partners(struct reb_simulation* r, size_t* out){
     return 1;
 }
 
+int pfvi_two_alone(struct reb_simulation* r){
+    return pfvi_gravity_two_alone(r, r->N);
+}
+
 int pfvi_density_of(struct reb_simulation* r, int stages, double* out){
     if (stages < PFVI_STAGES_MIN || stages > PFVI_STAGES_MAX){
         return 0;

@@ -28,7 +28,8 @@
  * The first iterate (pfvi_solve_predict) draws each body along its two-body
  * orbit about that centre (universal variables), the rest of its
  * acceleration extrapolated from the last step's stages and integrated by
- * the classical form's own stage formula.
+ * the classical form's own stage formula (none for two bodies alone, whose
+ * rest is round-off).
  *
  * The residual G(y) - y of each round is the exact one: the partner model
  * changes only how fast the iterates converge, never what they converge to.
@@ -1069,7 +1070,7 @@ enum pfvi_trial pfvi_solve_stages(struct reb_simulation* r, struct pfvi_state* s
     newton_order(st, N, &field);
     solve_scales(st, N, &field);
     if (predicted != PFVI_PREDICTED_RETRY){
-        pfvi_solve_predict(st, N, &field, h, predicted == PFVI_PREDICTED_EXTRAPOLATED);
+        pfvi_solve_predict(st, N, &field, h, predicted == PFVI_PREDICTED_EXTRAPOLATED, !pfvi_gravity_two_alone(r, N));
         ops->start_at(st, N);
     }
     ops->positions(st, N, h);
@@ -1523,14 +1524,19 @@ static void lagrange_basis(const struct pfvi_lobatto* rule, double rho, double (
 #undef ALL
 }
 
-void pfvi_solve_predict(struct pfvi_state* st, size_t N, const struct pfvi_field* field, double h, int extrapolate){
+void pfvi_solve_predict(struct pfvi_state* st, size_t N, const struct pfvi_field* field, double h, int extrapolate,
+        int rest){
     // The last step's stages, in units of its length, at this step's nodes:
     // the same for the same s and step ratio, so made again only when either
     // changed since the last extrapolated step (the same inputs, the same
-    // bits).
+    // bits). Without a rest, weights of zero: nothing extrapolated, a drift
+    // of zero.
+    static const struct pfvi_rest_weights no_rest = {0};
     const struct pfvi_rest_weights* rw = &st->predict_weights;
     struct pfvi_rest_weights start_only;
-    if (extrapolate){
+    if (!rest){
+        rw = &no_rest;
+    }else if (extrapolate){
         const double rho = h/st->predictor_h;
         if (st->predict_weights_s != st->rule.s || memcmp(&rho, &st->predict_weights_rho, sizeof(rho)) != 0){
             double basis_t[PFVI_STAGES_MAX][PFVI_STAGES_MAX] = {{0.}};   // (rows zero beyond s: rest_weights_of reads every m)
