@@ -24,6 +24,7 @@
 #ifndef PFVI_H
 #define PFVI_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 #include "rebound.h"
@@ -793,7 +794,10 @@ struct pfvi_stage_spread {
 };
 PFVI_INTERNAL struct pfvi_stage_spread pfvi_stage_spread(const double (*f)[3], const double (*a)[3],
         const double* weights, int s);
-PFVI_INTERNAL double pfvi_stage_resolution(const struct pfvi_stage_spread* spread, double scale2);
+static inline double pfvi_stage_resolution(const struct pfvi_stage_spread* spread, double scale2){
+    const double A2 = (scale2 > spread->A2) ? scale2 : spread->A2;
+    return (A2 > 0.) ? sqrt(spread->D2/A2) : 0.;
+}
 // The square of the largest single pull G m_j/r^2 (softened; every
 // attracting body j != i and ghost image) on particle i of p; 0 without gravity.
 PFVI_INTERNAL double pfvi_largest_pull2(const struct reb_particle* p, size_t N, const struct pfvi_field* f, size_t i);

@@ -803,14 +803,6 @@ struct pfvi_stage_spread pfvi_stage_spread(const double (*f)[3], const double (*
     return (struct pfvi_stage_spread){D[0]*D[0] + D[1]*D[1] + D[2]*D[2], A2};
 }
 
-double pfvi_stage_resolution(const struct pfvi_stage_spread* spread, double scale2){
-    const double A2 = (scale2 > spread->A2) ? scale2 : spread->A2;
-    if (!(A2 > 0.)){
-        return 0.;
-    }
-    return sqrt(spread->D2/A2);
-}
-
 double pfvi_largest_pull2(const struct reb_particle* p, size_t N, const struct pfvi_field* f, size_t i){
     if (!(f->G > 0.)){
         return 0.;
