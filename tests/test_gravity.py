@@ -208,17 +208,19 @@ def active_one(sim):
     (two_bodies(lambda sim: sim.init_megno(seed=1)), True),
     (two_bodies(third), False), (two_bodies(pulled), False), (two_bodies(ghosts), False),
     (two_bodies(active_one), False), (two_bodies(lambda sim: setattr(sim, "gravity", "compensated")), False),
-    (two_bodies(lambda sim: setattr(sim, "gravity", "none")), False)],
+    (two_bodies(lambda sim: setattr(sim, "gravity", "none")), False),
+    (two_bodies(lambda sim: setattr(sim, "G", -1.0)), False)],
     ids=["pair", "test-particle", "softened", "megno", "three", "force", "ghost-boxes", "N_active-1", "compensated",
-         "no-gravity"])
+         "no-gravity", "repulsive"])
 def test_the_predictor_takes_two_bodies_alone_only_where_nothing_else_acts(build, alone):
     """Two bodies whose only force is their mutual pull: each body's
     acceleration is the pair's Kepler pull about a barycentre that moves
     uniformly, so the predictor extrapolates no rest beside it (what it
     would extrapolate is round-off). Anything else acting (a third body,
     a force, ghost images, a body outside N_active that pulls without being
-    pulled, another gravity module) keeps the rest. The runs end where
-    IAS15's do."""
+    pulled, another gravity module, a repulsive G, whose force the
+    predictor does not draw as a Kepler orbit) keeps the rest. The runs end
+    where IAS15's do."""
     sim = build()
     sim.integrator = "pfvi"
     assert rebound_pfvi._lib.pfvi_two_alone(ctypes.byref(sim)) == int(alone)

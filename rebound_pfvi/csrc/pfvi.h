@@ -1632,8 +1632,8 @@ PFVI_INTERNAL void pfvi_warning(struct reb_simulation* r, const char* fmt, ...) 
 // force is not finite (a is written all the same).
 PFVI_INTERNAL int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st, size_t N);
 // Whether the real particles are two bodies whose only force is their
-// mutual pull (REBOUND's basic gravity between two active bodies, no ghost
-// boxes, nothing added; variational particles may be there): each body's
+// mutual pull (REBOUND's basic gravity with G > 0 between two active bodies,
+// no ghost boxes, nothing added; variational particles may be there): each body's
 // acceleration is then the pair's Kepler pull about their barycentre,
 // which moves uniformly, and what the predictor would call the rest of it
 // is round-off.

@@ -60,7 +60,9 @@ int pfvi_gravity_own(const struct reb_simulation* r, const struct pfvi_state* st
 }
 
 int pfvi_gravity_two_alone(const struct reb_simulation* r, size_t N){
-    return N == 2 && basic_real_gravity(r, N) && r->additional_forces == NULL
+    // (G > 0: the predictor draws the pair's pull along a Kepler orbit only
+    // then; a repulsive G leaves the whole force to the rest.)
+    return N == 2 && r->G > 0. && basic_real_gravity(r, N) && r->additional_forces == NULL
         && r->N_ghost_x == 0 && r->N_ghost_y == 0 && r->N_ghost_z == 0
         && (r->N_active == SIZE_MAX || r->N_active >= N);
 }
