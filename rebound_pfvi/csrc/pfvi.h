@@ -1185,6 +1185,7 @@ struct pfvi_state {
     struct reb_vec3d* dx;          // position increment of the step, with the carried low-order part
     double (*end_low)[3];          // the s-point step's end increment's low part (solve_take_end): this trial's
     struct reb_vec3d* dv;          // velocity increment of the step, with the carried low-order part
+    double (*dv_low)[3];           // what rounding the s-point step's dv lost (stages_advance): this trial's
     // Compensated summation: the low-order parts of x, y, z, vx, vy, vz that
     // the particles' doubles lost (Kahan). Saved in archives, so a continued
     // run stays bit-identical.

@@ -29,6 +29,7 @@ void pfvi_state_free(struct pfvi_state* st){
     free(st->dx);
     free(st->end_low);
     free(st->dv);
+    free(st->dv_low);
     free(st->compensation);
     free(st->stage_fit);
     free(st->stage_fit_classical);
@@ -150,6 +151,7 @@ int pfvi_scratch(struct pfvi_state* st, size_t N){
     st->dx = pfvi_grow(st->dx, N*sizeof(*st->dx), &ok);
     st->end_low = pfvi_grow(st->end_low, N*sizeof(*st->end_low), &ok);
     st->dv = pfvi_grow(st->dv, N*sizeof(*st->dv), &ok);
+    st->dv_low = pfvi_grow(st->dv_low, N*sizeof(*st->dv_low), &ok);
     st->stage_fit = pfvi_grow(st->stage_fit, N*sizeof(*st->stage_fit), &ok);
     st->stage_fit_classical = pfvi_grow(st->stage_fit_classical, N*sizeof(*st->stage_fit_classical), &ok);
     st->stage_a = pfvi_grow(st->stage_a, N*sizeof(*st->stage_a), &ok);
