@@ -635,16 +635,24 @@ void pfvi_discard_implausible(const struct reb_simulation* r, struct pfvi_state*
     if (!pfvi_t_lo_plausible(st->t_compensation, r->t)){
         st->t_compensation = 0.;
     }
-    // The carried low-order parts of x and v: below the coordinates' own precision.
+    // The carried low-order parts of x and v: below the precision of the
+    // vectors they belong to. Each component is judged against the vector's
+    // largest, not its own: a velocity component that ends a step near zero
+    // (a turning point) keeps the rounding of an increment as large as the
+    // other components, which the velocity increment's compensated sum
+    // carries (judged by its own component, it was dropped at every call's
+    // start, and steps(25) + steps(75) of a circle at 100 fixed steps an orbit
+    // no longer gave the bits of steps(100): a hostile trial).
     const struct reb_particle* const ps = r->particles;
     const size_t m = (st->N_compensation <= r->N) ? st->N_compensation : 0;
     for (size_t i=0; i<m; i++){
-        const double x[3] = {ps[i].x, ps[i].y, ps[i].z}, v[3] = {ps[i].vx, ps[i].vy, ps[i].vz};
+        const double x = fmax(fmax(fabs(ps[i].x), fabs(ps[i].y)), fmax(fabs(ps[i].z), DBL_MIN));
+        const double v = fmax(fmax(fabs(ps[i].vx), fabs(ps[i].vy)), fmax(fabs(ps[i].vz), DBL_MIN));
         const struct pfvi_compensation* const comp = &st->compensation[i];
         int plausible = 1;
         for (int c=0; c<3; c++){
-            plausible &= fabs(comp->x[c]) <= 1e-10*fmax(fabs(x[c]), DBL_MIN) + DBL_MIN;
-            plausible &= fabs(comp->v[c]) <= 1e-10*fmax(fabs(v[c]), DBL_MIN) + DBL_MIN;
+            plausible &= fabs(comp->x[c]) <= 1e-10*x + DBL_MIN;
+            plausible &= fabs(comp->v[c]) <= 1e-10*v + DBL_MIN;
         }
         if (!plausible){
             st->compensation[i] = (struct pfvi_compensation){{0., 0., 0.}, {0., 0., 0.}};
