@@ -10,7 +10,7 @@ import rebound
 
 import rebound_pfvi
 
-from conftest import two_body
+from conftest import needs_python_heartbeat, two_body
 
 STAGES = [s for s in rebound_pfvi.STAGES if s >= 3]
 
@@ -273,8 +273,8 @@ def test_a_velocity_component_near_zero_at_a_call_boundary_keeps_its_compensatio
     # 4e-16, and the velocity's carried rounding (the increment's, about
     # 1e-18) is larger than 1e-10 vx. Judged by its own component the
     # carried part was dropped at the next call's start, and the run split
-    # there (or continued from an archive or a copy, or with a heartbeat)
-    # no longer gave the bits of one call (1.5e-15 to 4e-14 apart).
+    # there (or continued from an archive or a copy) no longer gave the
+    # bits of one call (1.5e-15 to 4e-14 apart).
     one = _circle_at_fixed_steps()
     one.steps(100)
     split = _circle_at_fixed_steps()
@@ -290,6 +290,14 @@ def test_a_velocity_component_near_zero_at_a_call_boundary_keeps_its_compensatio
     assert _bits(restored) == _bits(one)
     copied.steps(75)
     assert _bits(copied) == _bits(one)
+
+
+@needs_python_heartbeat
+def test_a_heartbeat_that_does_nothing_keeps_a_turning_points_compensation():
+    # A heartbeat has every step start anew, judging the carried parts as a
+    # call's start does (the test above).
+    one = _circle_at_fixed_steps()
+    one.steps(100)
     beating = _circle_at_fixed_steps()
     beating.heartbeat = lambda simp: None
     beating.steps(100)
